@@ -1,0 +1,117 @@
+//! `meshsimplify info FILE|DIR [--json]`: what a mesh is made of and whether it is valid.
+//!
+//! The `--json` keys are a stable interface for scripts (documented in docs/meshsimplify.md):
+//! `file`, `vertices`, `faces`, `edges`, `bbox_min`, `bbox_max`, `edge_manifold`,
+//! `vertex_manifold`, `watertight`, `boundary_edges`, `boundary_loops`, `components`,
+//! `degenerate_faces`, `duplicate_faces`, `non_manifold_edges`, `load_seconds`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use meshgnn_geometry::{MeshFormat, MeshReport, mesh_report, read_mesh};
+use rayon::prelude::*;
+use serde_json::{Value, json};
+
+/// Arguments of `meshsimplify info`.
+#[derive(clap::Args, Debug)]
+pub struct InfoArgs {
+    /// A mesh file (.obj .ply .off .gltf .glb), or a folder whose mesh files are all reported.
+    pub path: PathBuf,
+    /// Print one JSON object per mesh (an array for a folder) instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Reports on one file, or on every mesh file of a folder in parallel.
+pub fn run(args: &InfoArgs) -> Result<()> {
+    if args.path.is_dir() {
+        let files = mesh_files(&args.path)?;
+        let reports: Vec<Value> = files
+            .par_iter()
+            .map(|file| inspect(file))
+            .collect::<Result<_>>()?;
+        if args.json {
+            println!("{}", Value::Array(reports));
+        } else {
+            reports.iter().for_each(print_text);
+        }
+    } else {
+        let report = inspect(&args.path)?;
+        if args.json {
+            println!("{report}");
+        } else {
+            print_text(&report);
+        }
+    }
+    Ok(())
+}
+
+/// Loads `file`, times the load, and returns its report as JSON.
+fn inspect(file: &Path) -> Result<Value> {
+    let start = Instant::now();
+    let mesh = read_mesh(file)?;
+    let load_seconds = start.elapsed().as_secs_f64();
+    let report = mesh_report(&mesh);
+    Ok(to_json(file, &report, load_seconds))
+}
+
+fn to_json(file: &Path, r: &MeshReport, load_seconds: f64) -> Value {
+    json!({
+        "file": file.display().to_string(),
+        "vertices": r.vertices,
+        "faces": r.faces,
+        "edges": r.edges,
+        "bbox_min": r.bbox_min,
+        "bbox_max": r.bbox_max,
+        "edge_manifold": r.edge_manifold,
+        "vertex_manifold": r.vertex_manifold,
+        "watertight": r.watertight,
+        "boundary_edges": r.boundary_edges,
+        "boundary_loops": r.boundary_loops,
+        "components": r.components,
+        "degenerate_faces": r.degenerate_faces,
+        "duplicate_faces": r.duplicate_faces,
+        "non_manifold_edges": r.non_manifold_edges,
+        "load_seconds": load_seconds,
+    })
+}
+
+fn print_text(report: &Value) {
+    let field = |key: &str| report.get(key).cloned().unwrap_or(Value::Null);
+    println!("{}", field("file").as_str().unwrap_or_default());
+    for key in [
+        "vertices",
+        "faces",
+        "edges",
+        "bbox_min",
+        "bbox_max",
+        "edge_manifold",
+        "vertex_manifold",
+        "watertight",
+        "boundary_edges",
+        "boundary_loops",
+        "components",
+        "degenerate_faces",
+        "duplicate_faces",
+        "non_manifold_edges",
+    ] {
+        println!("  {key:<19}{}", field(key));
+    }
+    let seconds = field("load_seconds").as_f64().unwrap_or_default();
+    println!("  {:<19}{:.3} s", "load_time", seconds);
+}
+
+/// The files of `dir` whose extension names a mesh format, sorted by name.
+fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry.with_context(|| format!("{}", dir.display()))?.path();
+        if path.is_file() && MeshFormat::from_path(&path).is_ok() {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}

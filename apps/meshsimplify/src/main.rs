@@ -1,0 +1,38 @@
+//! `meshsimplify`: inspect, simplify and evaluate triangle meshes.
+//!
+//! Thin by design: argument parsing, progress and file output live here, every computation
+//! lives in the meshgnn crates. Each subcommand is one module with an `Args` struct and `run`.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod info;
+
+/// Inspect, simplify and evaluate triangle meshes (OBJ, PLY, OFF, glTF/GLB).
+#[derive(Parser, Debug)]
+#[command(name = "meshsimplify", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Counts, bounding box, manifold/watertight status, boundaries, components, load time.
+    Info(info::InfoArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info(args) => info::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("meshsimplify: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
