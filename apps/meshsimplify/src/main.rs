@@ -7,7 +7,9 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod eval;
 mod info;
+mod simplify;
 
 /// Inspect, simplify and evaluate triangle meshes (OBJ, PLY, OFF, glTF/GLB).
 #[derive(Parser, Debug)]
@@ -21,12 +23,18 @@ struct Cli {
 enum Command {
     /// Counts, bounding box, manifold/watertight status, boundaries, components, load time.
     Info(info::InfoArgs),
+    /// Simplify a mesh to a ratio or a face count (QEM edge collapse).
+    Simplify(simplify::SimplifyArgs),
+    /// Compare a simplified mesh with its original: CD, Hausdorff, NE, WA, LE, holes, manifold.
+    Eval(eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Info(args) => info::run(args),
+        Command::Simplify(args) => simplify::run(args),
+        Command::Eval(args) => eval::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

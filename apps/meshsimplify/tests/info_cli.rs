@@ -1,4 +1,5 @@
 //! End-to-end tests of `meshsimplify info`: the binary run as a user runs it.
+#![allow(clippy::expect_used)]
 
 use std::path::Path;
 use std::process::Command;

@@ -14,11 +14,64 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+mod io;
 mod point_cloud;
 mod primitives;
 mod tri_mesh;
+mod vec3;
+
+mod boundary_loops;
+mod connected_components;
+mod cotangent_laplacian;
+mod curvature_features;
+mod degenerate_faces;
+mod duplicate_faces;
+mod edge_topology;
+mod face_normals;
+mod graph_laplacian;
+mod knn;
+mod laplacian_eigenvectors;
+mod manifold;
+mod mass_matrix;
+mod mesh_report;
+mod non_manifold_edges;
+mod normalization;
+mod pca_normals;
+mod surface_sampling;
+mod symmetric_eigen3;
+mod vertex_normals;
+mod watertight;
 
 pub use error::{Error, Result};
+/// The faer version whose sparse and dense matrices this crate returns.
+pub use faer;
+pub use io::{
+    MeshFormat, PlyEncoding, atomic_write, read_mesh, read_mesh_bytes, read_point_cloud,
+    read_point_cloud_bytes, write_mesh, write_ply, write_point_cloud,
+};
 pub use point_cloud::PointCloud;
 pub use primitives::{grid_plane, icosphere, subdivided_cube};
 pub use tri_mesh::TriMesh;
+
+pub use boundary_loops::boundary_loops;
+pub use connected_components::{UNREFERENCED, connected_components};
+pub use cotangent_laplacian::cotangent_laplacian;
+pub use curvature_features::{CurvatureFeatures, curvature_features, curvature_features_with_h};
+pub use degenerate_faces::degenerate_faces;
+pub use duplicate_faces::duplicate_faces;
+pub use edge_topology::{EdgeIncidence, EdgeTopology, edge_topology};
+pub use face_normals::{face_areas, face_normals};
+pub use graph_laplacian::{
+    combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
+    normalized_laplacian_of_mesh,
+};
+pub use laplacian_eigenvectors::{LaplacianEigenpairs, laplacian_eigenvectors};
+pub use manifold::{is_edge_manifold, is_vertex_manifold, non_manifold_vertices};
+pub use mass_matrix::lumped_mass_matrix;
+pub use mesh_report::{MeshReport, mesh_report};
+pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
+pub use normalization::{Normalization, unit_sphere_normalization};
+pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
+pub use surface_sampling::{SurfaceSamples, sample_surface};
+pub use vertex_normals::vertex_normals;
+pub use watertight::is_watertight;

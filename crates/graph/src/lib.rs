@@ -7,6 +7,47 @@
 //! replacement. One operator per module, named after what it computes.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+mod closest_point_on_triangle;
 mod error;
+mod mesh_hierarchy;
+mod pooling_matrices;
+mod qem_decimation;
+mod quadric;
+mod weld_by_position;
+
+mod candidate_triangles;
+mod csr_matrix;
+mod farthest_point_sampling;
+mod fast_farthest_point_sampling;
+mod k_ring;
+mod kd_tree;
+mod knn_graph;
+mod mesh_adjacency;
+mod radius_graph;
+mod spiral;
+mod triangle_knn_graph;
+mod weighted_sampling;
 
 pub use error::{Error, Result};
+pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
+pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};
+pub use qem_decimation::{
+    Decimation, DecimationOptions, StopReason, Target, decimate, decimate_with_progress,
+};
+pub use quadric::Quadric;
+
+pub use candidate_triangles::candidate_triangles;
+pub use csr_matrix::CsrMatrix;
+pub use farthest_point_sampling::{
+    FpsStart, farthest_point_sampling, farthest_point_sampling_batch,
+};
+pub use fast_farthest_point_sampling::{
+    fast_farthest_point_sampling, fast_farthest_point_sampling_batch,
+};
+pub use k_ring::{k_disk, k_rings};
+pub use knn_graph::{Neighbours, knn_graph, knn_query};
+pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};
+pub use radius_graph::{RadiusNeighbours, radius_graph};
+pub use spiral::{Spirals, spiral_sequences};
+pub use triangle_knn_graph::{triangle_barycentres, triangle_knn_graph};
+pub use weighted_sampling::{uniform_sampling, weighted_sampling};

@@ -1,0 +1,57 @@
+//! `pcsimplify eval ORIGINAL SIMPLIFIED [--json] [--k 16]`: perceptual quality of a simplified
+//! point cloud (thesis ch. 5.4, Table 5.1).
+//!
+//! Both clouds are normalised by the original's centroid and bounding-sphere radius. The
+//! `--json` keys are a stable interface (see docs/losses.md): `cd` (Chamfer distance, per-point
+//! means of both directions, squared unit-sphere units), `nc` (normal consistency of the PCA
+//! normals, eq. 5.14, unoriented, in [0, 2]), `ce` (curvature error, eq. 5.8), `re` (roughness
+//! error), `sdm` (structural distortion, eq. 5.10-5.13, in [0, 1]); the last three are
+//! dimensionless.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use meshgnn_geometry::read_point_cloud;
+use meshgnn_losses::metrics::{
+    EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation, point_cloud_evaluation,
+};
+use serde_json::json;
+
+/// Arguments of `pcsimplify eval`.
+#[derive(clap::Args, Debug)]
+pub struct EvalArgs {
+    /// The original point cloud (.ply .obj .xyz; a mesh file gives its vertices).
+    pub original: PathBuf,
+    /// The simplified point cloud to evaluate against it.
+    pub simplified: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Neighbours for the curvature features (eq. 5.1-5.3).
+    #[arg(long, default_value_t = EVALUATION_CURVATURE_NEIGHBOURS)]
+    pub k: usize,
+}
+
+/// Loads both clouds, evaluates, prints text or JSON.
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let original = read_point_cloud(&args.original)
+        .with_context(|| format!("reading the original cloud {}", args.original.display()))?;
+    let simplified = read_point_cloud(&args.simplified)
+        .with_context(|| format!("reading the simplified cloud {}", args.simplified.display()))?;
+    let e = point_cloud_evaluation(original.points(), simplified.points(), args.k)
+        .context("evaluating the simplified cloud")?;
+    if args.json {
+        println!("{}", to_json(&e));
+    } else {
+        println!("CD   {:.6e}  (squared unit-sphere units)", e.cd);
+        println!("NC   {:.6}", e.nc);
+        println!("CE   {:.6}", e.ce);
+        println!("RE   {:.6}", e.re);
+        println!("SDM  {:.6}", e.sdm);
+    }
+    Ok(())
+}
+
+fn to_json(e: &PointCloudEvaluation) -> serde_json::Value {
+    json!({ "cd": e.cd, "nc": e.nc, "ce": e.ce, "re": e.re, "sdm": e.sdm })
+}

@@ -1,0 +1,57 @@
+//! # meshgnn-data
+//!
+//! Synthetic datasets for the meshgnn models, generated here because no data can be
+//! downloaded (SPEC §5), and registered-mesh folder datasets so users bring their own:
+//!
+//! - **Hands** (thesis ch. 3.3-3.4): one fixed-topology procedural template, per-subject
+//!   shape from age 1 to 81 (children's proportions, Table 3.2), and articulation.
+//! - **Faces** (thesis ch. 4.3-4.4): a head template with identity parameters, the six 4DFAB
+//!   expressions and 4D sequences with motion labels and the intensity scaling of eq. 4.3.
+//! - **Simplification shapes** (thesis ch. 5.5, 6.5): meshes from signed distance functions
+//!   (CAD-like solids, blended creatures), noisy scans (ch. 5.5.7), LiDAR-like point clouds,
+//!   with shape-family-disjoint splits.
+//! - **Folder datasets**: a directory of registered meshes plus a `dataset.json` manifest.
+//!
+//! Every generator is deterministic from a `seed: u64`, whatever the thread count.
+//! Dependencies beyond the workspace's usual set: `png` (contact-sheet previews) and
+//! `serde_json` (manifests).
+//!
+//! # Conventions
+//! - Positions `[f32; 3]`; internal geometry in `f64`. Hands and faces are in millimetres.
+//! - Triangles are counter-clockwise seen from outside.
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
+
+mod catmull_clark;
+mod error;
+mod expression_sequence;
+mod expressions;
+mod face_template;
+mod folder_dataset;
+mod hand_dataset;
+mod hand_pose;
+mod hand_shape;
+mod hand_template;
+mod pca_variance;
+mod preview;
+mod self_intersections;
+mod shapes;
+mod vec3;
+
+pub use catmull_clark::{QuadSubdivision, catmull_clark};
+pub use error::{Error, Result};
+pub use expression_sequence::{
+    FaceSequence, FaceSetConfig, FaceSubject, SequenceTiming, intensity_scale, intensity_scales,
+};
+pub use expressions::{Actions, Expression, apply_actions};
+pub use face_template::{FaceIdentity, FaceTemplate};
+pub use folder_dataset::{FolderDataset, MANIFEST_FILE, Manifest, write_dataset, write_manifest};
+pub use hand_dataset::{CHILD_AGE, HandSample, HandSetConfig, hand_splits};
+pub use hand_pose::{FINGER_FLEXION_DEG, HandPose, OPPOSITION_DEG, SPREAD_DEG, THUMB_FLEXION_DEG};
+pub use hand_shape::{FINGER_NAMES, HandShape};
+pub use hand_template::{DEFAULT_HAND_SUBDIVISIONS, HandTemplate};
+pub use pca_variance::{components_for_variance, pca_explained_variance};
+pub use preview::{RgbImage, View, contact_sheet, encode_png, render_mesh, write_png};
+pub use self_intersections::{self_intersecting_pairs, self_intersections};
+pub use shapes::{
+    LidarConfig, ShapeFamily, lidar_scene, marching_tetrahedra, noisy_scan, shape_mesh,
+};

@@ -1,0 +1,263 @@
+//! PNG contact sheets of generated meshes: a small software rasteriser (z-buffer, Lambert
+//! shading with interpolated vertex normals, orthographic view fitted to each mesh), so a user
+//! can check a synthetic dataset at a glance without a 3D viewer.
+//!
+//! # Conventions
+//! - Images are 8-bit RGB, row major, top row first.
+//! - The view looks along the camera's −z; `yaw` rotates the mesh about +y, then `pitch` about
+//!   +x, before the projection onto the camera's x (right) and y (up) axes.
+
+use std::path::Path;
+
+use meshgnn_geometry::{TriMesh, vertex_normals};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result, invalid};
+use crate::vec3::{M3, V3, axis_angle, dot, mul_m, mul_v, normalize, to_f64};
+use meshgnn_geometry::atomic_write;
+
+/// An 8-bit RGB image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `height × width × 3` bytes, top row first.
+    pub pixels: Vec<u8>,
+}
+
+/// Camera orientation for [`render_mesh`], in degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// Rotation about +y applied first.
+    pub yaw: f64,
+    /// Rotation about +x applied second.
+    pub pitch: f64,
+}
+
+impl Default for View {
+    /// A three-quarter view from the front-right, slightly above.
+    fn default() -> Self {
+        Self {
+            yaw: -25.0,
+            pitch: 15.0,
+        }
+    }
+}
+
+const BACKGROUND: [u8; 3] = [250, 250, 250];
+
+/// Renders `mesh` into a `size × size` tile: orthographic, fitted with a 6 % margin,
+/// two-sided Lambert shading of interpolated vertex normals under a light from the viewer's
+/// upper left, mixed with 25 % ambient, tinted by `color` (RGB in `[0, 1]`).
+///
+/// ```
+/// use meshgnn_data::{View, render_mesh};
+/// use meshgnn_geometry::icosphere;
+/// let img = render_mesh(&icosphere(2), 32, View::default(), [1.0, 1.0, 1.0])?;
+/// assert_eq!(img.pixels.len(), 32 * 32 * 3);
+/// // The centre is lit sphere, the corner background.
+/// let px = |x: usize, y: usize| img.pixels[(y * 32 + x) * 3];
+/// assert!(px(16, 16) < 250 && px(16, 16) > 100);
+/// assert_eq!(px(0, 0), 250);
+/// # Ok::<(), meshgnn_data::Error>(())
+/// ```
+pub fn render_mesh(mesh: &TriMesh, size: u32, view: View, color: [f64; 3]) -> Result<RgbImage> {
+    if !(8..=8192).contains(&size) {
+        return Err(invalid(
+            "size",
+            size,
+            "tile size must be in 8..=8192 pixels",
+        ));
+    }
+    if mesh.vertex_count() == 0 || mesh.face_count() == 0 {
+        return Err(invalid("mesh", "empty", "nothing to render"));
+    }
+    let rot: M3 = mul_m(
+        &axis_angle([1.0, 0.0, 0.0], view.pitch.to_radians()),
+        &axis_angle([0.0, 1.0, 0.0], view.yaw.to_radians()),
+    );
+    let cam: Vec<V3> = mesh
+        .vertices()
+        .par_iter()
+        .map(|&p| mul_v(&rot, to_f64(p)))
+        .collect();
+    let normals: Vec<V3> = vertex_normals(mesh)
+        .into_par_iter()
+        .map(|n| mul_v(&rot, to_f64(n)))
+        .collect();
+    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+    for p in &cam {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12);
+    let s = f64::from(size);
+    let px_scale = 0.88 * s / extent;
+    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    let screen: Vec<V3> = cam
+        .iter()
+        .map(|p| {
+            [
+                0.5 * s + (p[0] - centre[0]) * px_scale,
+                0.5 * s - (p[1] - centre[1]) * px_scale,
+                p[2],
+            ]
+        })
+        .collect();
+    let n = size as usize;
+    let mut depth = vec![f64::NEG_INFINITY; n * n];
+    let mut shade = vec![-1.0f64; n * n];
+    let light = normalize([-0.4, 0.5, 0.77]);
+    for tri in mesh.triangles() {
+        let [a, b, c] = tri.map(|v| v as usize);
+        let (Some(pa), Some(pb), Some(pc)) = (screen.get(a), screen.get(b), screen.get(c)) else {
+            continue;
+        };
+        let area = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let x0 = pa[0].min(pb[0]).min(pc[0]).floor().max(0.0) as usize;
+        let x1 = (pa[0].max(pb[0]).max(pc[0]).ceil() as usize).min(n.saturating_sub(1));
+        let y0 = pa[1].min(pb[1]).min(pc[1]).floor().max(0.0) as usize;
+        let y1 = (pa[1].max(pb[1]).max(pc[1]).ceil() as usize).min(n.saturating_sub(1));
+        let (na, nb, nc) = (normals[a], normals[b], normals[c]);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let (qx, qy) = (x as f64 + 0.5, y as f64 + 0.5);
+                let w0 = ((pb[0] - qx) * (pc[1] - qy) - (pb[1] - qy) * (pc[0] - qx)) / area;
+                let w1 = ((pc[0] - qx) * (pa[1] - qy) - (pc[1] - qy) * (pa[0] - qx)) / area;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = w0 * pa[2] + w1 * pb[2] + w2 * pc[2];
+                let i = y * n + x;
+                if z > depth[i] {
+                    depth[i] = z;
+                    let nrm = normalize([
+                        w0 * na[0] + w1 * nb[0] + w2 * nc[0],
+                        w0 * na[1] + w1 * nb[1] + w2 * nc[1],
+                        w0 * na[2] + w1 * nb[2] + w2 * nc[2],
+                    ]);
+                    shade[i] = dot(nrm, light).abs();
+                }
+            }
+        }
+    }
+    let mut pixels = Vec::with_capacity(n * n * 3);
+    for &l in &shade {
+        if l < 0.0 {
+            pixels.extend_from_slice(&BACKGROUND);
+        } else {
+            let lum = 0.25 + 0.75 * l;
+            for c in color {
+                pixels.push((255.0 * (lum * c).clamp(0.0, 1.0)).round() as u8);
+            }
+        }
+    }
+    Ok(RgbImage {
+        width: size,
+        height: size,
+        pixels,
+    })
+}
+
+/// A grid of `tile × tile` renders of `meshes`, `columns` per row (rendered in parallel).
+///
+/// ```
+/// use meshgnn_data::{View, contact_sheet};
+/// use meshgnn_geometry::{icosphere, subdivided_cube};
+/// let sheet = contact_sheet(&[icosphere(1), subdivided_cube(2), icosphere(2)], 2, 16, View::default())?;
+/// assert_eq!((sheet.width, sheet.height), (32, 32));
+/// # Ok::<(), meshgnn_data::Error>(())
+/// ```
+pub fn contact_sheet(meshes: &[TriMesh], columns: u32, tile: u32, view: View) -> Result<RgbImage> {
+    if meshes.is_empty() || columns == 0 {
+        return Err(invalid(
+            "meshes",
+            meshes.len(),
+            "need at least one mesh and one column",
+        ));
+    }
+    let columns = columns.min(meshes.len() as u32);
+    let rows = (meshes.len() as u32).div_ceil(columns);
+    let tints = [
+        [0.95, 0.80, 0.68],
+        [0.75, 0.85, 0.95],
+        [0.85, 0.92, 0.78],
+        [0.92, 0.85, 0.95],
+    ];
+    let tiles = meshes
+        .par_iter()
+        .enumerate()
+        .map(|(i, m)| render_mesh(m, tile, view, tints[i % tints.len()]))
+        .collect::<Result<Vec<_>>>()?;
+    let (w, h) = ((columns * tile) as usize, (rows * tile) as usize);
+    let mut pixels = vec![BACKGROUND[0]; w * h * 3];
+    let t = tile as usize;
+    for (i, img) in tiles.iter().enumerate() {
+        let (cx, cy) = (i % columns as usize, i / columns as usize);
+        for y in 0..t {
+            let src = y * t * 3;
+            let dst = ((cy * t + y) * w + cx * t) * 3;
+            if let (Some(d), Some(s)) = (
+                pixels.get_mut(dst..dst + t * 3),
+                img.pixels.get(src..src + t * 3),
+            ) {
+                d.copy_from_slice(s);
+            }
+        }
+    }
+    Ok(RgbImage {
+        width: w as u32,
+        height: h as u32,
+        pixels,
+    })
+}
+
+/// Encodes `image` as PNG bytes.
+pub fn encode_png(image: &RgbImage) -> std::result::Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer
+            .write_image_data(&image.pixels)
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(bytes)
+}
+
+/// Writes `image` to `path` as a PNG, atomically.
+///
+/// ```
+/// use meshgnn_data::{RgbImage, write_png};
+/// let dir = tempfile::tempdir()?;
+/// let path = dir.path().join("a.png");
+/// write_png(&path, &RgbImage { width: 2, height: 1, pixels: vec![0; 6] })?;
+/// assert_eq!(&std::fs::read(&path)?[1..4], b"PNG");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_png(path: impl AsRef<Path>, image: &RgbImage) -> Result<()> {
+    let path = path.as_ref();
+    let expected = image.width as usize * image.height as usize * 3;
+    if image.pixels.len() != expected {
+        return Err(invalid(
+            "image",
+            image.pixels.len(),
+            "pixel buffer is not width × height × 3",
+        ));
+    }
+    let bytes = encode_png(image).map_err(|message| Error::Png {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    Ok(atomic_write(path, &bytes)?)
+}

@@ -1,0 +1,132 @@
+//! Invariants of the synthetic hand set: shared topology, manifold with a single wrist
+//! boundary, no self-intersections, determinism, and non-linearity of articulation (PCA).
+
+use meshgnn_data::{
+    HandPose, HandSetConfig, HandTemplate, components_for_variance, pca_explained_variance,
+    self_intersections,
+};
+use meshgnn_geometry::{TriMesh, boundary_loops, mesh_report};
+
+fn cfg(level: u32, articulated: bool) -> HandSetConfig {
+    HandSetConfig {
+        subdivisions: level,
+        articulated,
+        seed: 11,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn samples_share_topology_and_are_manifold_with_one_wrist_loop() {
+    let t = HandTemplate::new(2).unwrap();
+    for i in 0..6 {
+        let s = cfg(2, true).sample(&t, i).unwrap();
+        let mesh = TriMesh::new(s.vertices, t.triangles().to_vec()).unwrap();
+        let r = mesh_report(&mesh);
+        assert!(r.edge_manifold && r.vertex_manifold, "{r:?}");
+        assert_eq!(r.components, 1);
+        assert_eq!(r.degenerate_faces, 0, "sample {i}");
+        let loops = boundary_loops(&mesh);
+        assert_eq!(loops.len(), 1, "sample {i}");
+        for &v in &loops[0] {
+            assert!(
+                mesh.vertices()[v as usize][1].abs() < 1e-3,
+                "wrist loop off the y = 0 plane"
+            );
+        }
+    }
+}
+
+#[test]
+fn generated_hands_do_not_self_intersect() {
+    let t = HandTemplate::new(1).unwrap();
+    let rest = t
+        .generate(&meshgnn_data::HandShape::adult(), &HandPose::rest())
+        .unwrap();
+    assert_eq!(self_intersections(&rest), 0);
+    for i in 0..8 {
+        let s = cfg(1, true).sample(&t, i).unwrap();
+        let mesh = TriMesh::new(s.vertices, t.triangles().to_vec()).unwrap();
+        assert_eq!(self_intersections(&mesh), 0, "hand {i} pose {:?}", s.pose);
+    }
+}
+
+#[test]
+fn extreme_poses_within_the_ranges_do_not_self_intersect() {
+    let t = HandTemplate::new(1).unwrap();
+    let shape = meshgnn_data::HandShape::random(30.0, 3).unwrap();
+    let mut fist = HandPose::rest();
+    let mut spread = HandPose::rest();
+    for f in 0..5 {
+        let ranges = if f == 0 {
+            meshgnn_data::THUMB_FLEXION_DEG
+        } else {
+            meshgnn_data::FINGER_FLEXION_DEG
+        };
+        for (j, range) in ranges.iter().enumerate() {
+            fist.flexion[f][j] = range[1].to_radians();
+        }
+        spread.spread[f] = meshgnn_data::SPREAD_DEG[f][1].to_radians();
+    }
+    fist.opposition = meshgnn_data::OPPOSITION_DEG[1].to_radians();
+    for pose in [fist, spread] {
+        assert!(pose.in_range());
+        assert_eq!(
+            self_intersections(&t.generate(&shape, &pose).unwrap()),
+            0,
+            "{pose:?}"
+        );
+    }
+}
+
+#[test]
+fn same_seed_same_arrays_different_seed_differs() {
+    let t = HandTemplate::new(1).unwrap();
+    let a = cfg(1, true).sample(&t, 3).unwrap();
+    let b = cfg(1, true).sample(&t, 3).unwrap();
+    assert_eq!(a.vertices, b.vertices);
+    let other = HandSetConfig {
+        seed: 12,
+        ..cfg(1, true)
+    };
+    assert_ne!(a.vertices, other.sample(&t, 3).unwrap().vertices);
+    // Determinism does not depend on the thread count.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let c = pool.install(|| cfg(1, true).sample(&t, 3).unwrap());
+    assert_eq!(a.vertices, c.vertices);
+}
+
+#[test]
+fn articulation_makes_the_shape_space_non_linear() {
+    let t = HandTemplate::new(1).unwrap();
+    let set = |articulated| -> Vec<Vec<[f32; 3]>> {
+        (0..150)
+            .map(|i| cfg(1, articulated).sample(&t, i).unwrap().vertices)
+            .collect()
+    };
+    let posed = pca_explained_variance(&set(true)).unwrap();
+    let still = pca_explained_variance(&set(false)).unwrap();
+    let (np, ns) = (
+        components_for_variance(&posed, 0.95),
+        components_for_variance(&still, 0.95),
+    );
+    eprintln!("components for 95 %: posed {np}, pose-free {ns}");
+    assert!(np >= 2 * ns, "posed {np} vs pose-free {ns}");
+}
+
+#[test]
+fn children_split_holds_only_children() {
+    let t = HandTemplate::new(1).unwrap();
+    let c = HandSetConfig {
+        children_fraction: 0.5,
+        ..cfg(1, true)
+    };
+    let samples: Vec<_> = (0..40).map(|i| c.sample(&t, i).unwrap()).collect();
+    assert!(samples.iter().any(|s| s.split == "children"));
+    for s in &samples {
+        assert_eq!(s.split == "children", s.shape.age < meshgnn_data::CHILD_AGE);
+    }
+}

@@ -1,0 +1,793 @@
+//! glTF 2.0 reader (JSON `.gltf` and binary `.glb`) and GLB writer.
+//!
+//! Reading uses the `gltf` crate for the JSON document and its validation, but parses the
+//! GLB container and every accessor itself with checked arithmetic (the crate's accessor
+//! iterators trust offsets and types and can panic on hostile files). All triangle
+//! primitives of the default scene (all scenes when none is marked default, all meshes when
+//! there are no scenes) are merged, node transforms applied down the hierarchy, normals by
+//! the inverse-transpose, winding flipped under a mirroring transform. `TriangleStrip` and
+//! `TriangleFan` are converted to triangles; points and lines are an error for a mesh.
+//! Buffers: the GLB binary chunk, base64 `data:` URIs, and (from a file only) external
+//! `.bin` files next to the `.gltf`.
+
+use super::format_error::format_error;
+use super::mesh_data::MeshData;
+use crate::error::Result;
+use gltf::Semantic;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use std::path::Path;
+
+/// Most node instances visited; guards against cycles and exponential instancing.
+const MAX_NODE_VISITS: usize = 1 << 20;
+/// Deepest node hierarchy followed.
+const MAX_DEPTH: usize = 256;
+
+/// Splits a GLB container into its JSON chunk and optional binary chunk.
+fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [u8]>)> {
+    let word = |at: usize| -> Option<u32> {
+        bytes
+            .get(at..at + 4)
+            .and_then(|b| b.try_into().ok())
+            .map(u32::from_le_bytes)
+    };
+    let header = |message: &str| format_error(path, "GLB header", message.to_string());
+    if bytes.get(..4) != Some(b"glTF") {
+        return Err(header("missing `glTF` magic"));
+    }
+    if word(4) != Some(2) {
+        return Err(header("only glTF version 2 is supported"));
+    }
+    let length = word(8).ok_or_else(|| header("truncated"))? as usize;
+    if length > bytes.len() || length < 12 {
+        return Err(header(&format!(
+            "declares {length} bytes, file has {}",
+            bytes.len()
+        )));
+    }
+    let mut chunks = Vec::new();
+    let mut at = 12usize;
+    while at < length {
+        let element = format!("GLB chunk {}", chunks.len());
+        let (Some(size), Some(kind)) = (word(at), word(at + 4)) else {
+            return Err(format_error(path, element, "truncated chunk header"));
+        };
+        let start = at + 8;
+        let end = start
+            .checked_add(size as usize)
+            .filter(|&e| e <= length)
+            .ok_or_else(|| {
+                format_error(
+                    path,
+                    element.clone(),
+                    format!("chunk of {size} bytes runs past the end"),
+                )
+            })?;
+        chunks.push((kind, bytes.get(start..end).unwrap_or_default()));
+        at = end;
+    }
+    match chunks.as_slice() {
+        [(0x4E4F_534A, json), rest @ ..] => {
+            let bin = rest
+                .iter()
+                .find(|(k, _)| *k == 0x004E_4942)
+                .map(|(_, b)| *b);
+            Ok((json, bin))
+        }
+        _ => Err(format_error(
+            path,
+            "GLB chunk 0",
+            "first chunk must be JSON",
+        )),
+    }
+}
+
+/// Reads glTF or GLB bytes. `base` is the directory for external buffers (`None`: bytes
+/// from memory, external buffers are an error). With `points_ok`, non-triangle primitives
+/// contribute their vertices instead of failing (for point clouds).
+pub(crate) fn read_gltf(
+    bytes: &[u8],
+    path: &Path,
+    base: Option<&Path>,
+    points_ok: bool,
+) -> Result<MeshData> {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        split_glb(bytes, path)?
+    } else {
+        (bytes, None)
+    };
+    let root = gltf::json::Root::from_slice(json)
+        .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
+    // gltf-json's validation indexes `accessors[POSITION]` before checking the index
+    // (a panic on hostile files), so that one reference is checked here first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&gltf::json::validation::Checked::Valid(Semantic::Positions));
+            if let Some(index) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(format_error(
+                    path,
+                    format!("primitive {p} of mesh {m}"),
+                    format!("POSITION accessor {} does not exist", index.value()),
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root)
+        .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
+    let buffers = gltf::import_buffers(&document, base, blob.map(<[u8]>::to_vec))
+        .map_err(|e| format_error(path, "glTF buffers", e.to_string()))?;
+    let buffers: Vec<Vec<u8>> = buffers.into_iter().map(|b| b.0).collect();
+    let mut instances: Vec<(gltf::Mesh, [[f64; 4]; 4])> = Vec::new();
+    let identity = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    let scenes: Vec<gltf::Scene> = match document.default_scene() {
+        Some(scene) => vec![scene],
+        None => document.scenes().collect(),
+    };
+    if scenes.is_empty() {
+        instances.extend(document.meshes().map(|m| (m, identity)));
+    }
+    let mut visits = 0usize;
+    for scene in scenes {
+        let mut stack: Vec<(gltf::Node, [[f64; 4]; 4], usize)> =
+            scene.nodes().map(|n| (n, identity, 0)).collect();
+        while let Some((node, parent, depth)) = stack.pop() {
+            visits += 1;
+            if visits > MAX_NODE_VISITS || depth > MAX_DEPTH {
+                return Err(format_error(
+                    path,
+                    format!("node {}", node.index()),
+                    "node hierarchy too deep or too many instances (a cycle?)",
+                ));
+            }
+            let local = node.transform().matrix().map(|c| c.map(f64::from));
+            let world = multiply(&parent, &local);
+            if let Some(mesh) = node.mesh() {
+                instances.push((mesh, world));
+            }
+            // Reverse so children come out in document order.
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
+        }
+    }
+    let mut out = MeshData::default();
+    let (mut all_normals, mut all_uvs, mut all_colors) = (true, true, true);
+    let (mut normals, mut uvs, mut colors) = (Vec::new(), Vec::new(), Vec::new());
+    for (mesh, world) in &instances {
+        for primitive in mesh.primitives() {
+            let element = format!("primitive {} of mesh {}", primitive.index(), mesh.index());
+            let fail = |message: String| format_error(path, element.clone(), message);
+            let mode = primitive.mode();
+            let triangles_mode = matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            );
+            if !triangles_mode && !points_ok {
+                return Err(fail(format!("mode {mode:?} is not a triangle mode")));
+            }
+            let positions_accessor = primitive
+                .get(&Semantic::Positions)
+                .ok_or_else(|| fail("has no POSITION attribute".into()))?;
+            let positions: Vec<[f32; 3]> = read_floats(&positions_accessor, &buffers)
+                .map_err(|m| fail(format!("POSITION: {m}")))?;
+            let base_index = out.vertices.len();
+            let offset =
+                u32::try_from(base_index).map_err(|_| fail("more than 2^32 vertices".into()))?;
+            let count = positions.len();
+            out.vertices
+                .extend(positions.iter().map(|p| transform_point(world, p)));
+            match primitive.get(&Semantic::Normals) {
+                Some(a) => {
+                    let n: Vec<[f32; 3]> =
+                        read_floats(&a, &buffers).map_err(|m| fail(format!("NORMAL: {m}")))?;
+                    check_count(n.len(), count).map_err(|m| fail(format!("NORMAL: {m}")))?;
+                    normals.extend(n.iter().map(|n| transform_normal(world, n)));
+                }
+                None => all_normals = false,
+            }
+            match primitive.get(&Semantic::TexCoords(0)) {
+                Some(a) => {
+                    let t: Vec<[f32; 2]> =
+                        read_floats(&a, &buffers).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
+                    check_count(t.len(), count).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
+                    uvs.extend(t);
+                }
+                None => all_uvs = false,
+            }
+            match primitive.get(&Semantic::Colors(0)) {
+                Some(a) => {
+                    let c: Vec<[f32; 3]> = if a.dimensions() == Dimensions::Vec4 {
+                        let c4: Vec<[f32; 4]> =
+                            read_floats(&a, &buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?;
+                        c4.into_iter().map(|c| [c[0], c[1], c[2]]).collect()
+                    } else {
+                        read_floats(&a, &buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?
+                    };
+                    check_count(c.len(), count).map_err(|m| fail(format!("COLOR_0: {m}")))?;
+                    colors.extend(c);
+                }
+                None => all_colors = false,
+            }
+            if !triangles_mode {
+                continue;
+            }
+            let indices: Vec<u32> = match primitive.indices() {
+                Some(a) => read_indices(&a, &buffers).map_err(|m| fail(format!("indices: {m}")))?,
+                None => (0..u32::try_from(count).map_err(|_| fail("too many vertices".into()))?)
+                    .collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+                return Err(fail(format!("index {bad} out of range ({count} vertices)")));
+            }
+            let mirrored = determinant3(world) < 0.0;
+            let mut push = |a: u32, b: u32, c: u32| {
+                let t = [a + offset, b + offset, c + offset];
+                out.triangles
+                    .push(if mirrored { [t[0], t[2], t[1]] } else { t });
+            };
+            match mode {
+                Mode::TriangleStrip => {
+                    for (i, w) in indices.windows(3).enumerate() {
+                        if let [a, b, c] = *w {
+                            if i % 2 == 0 {
+                                push(a, b, c)
+                            } else {
+                                push(b, a, c)
+                            }
+                        }
+                    }
+                }
+                Mode::TriangleFan => {
+                    if let Some((&first, rest)) = indices.split_first() {
+                        for w in rest.windows(2) {
+                            if let [b, c] = *w {
+                                push(first, b, c);
+                            }
+                        }
+                    }
+                }
+                _ => {
+                    if !indices.len().is_multiple_of(3) {
+                        return Err(fail(format!(
+                            "{} indices is not a multiple of 3",
+                            indices.len()
+                        )));
+                    }
+                    for t in indices.chunks_exact(3) {
+                        if let [a, b, c] = *t {
+                            push(a, b, c);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let any = !instances.is_empty();
+    out.normals = (any && all_normals).then_some(normals);
+    out.uvs = (any && all_uvs).then_some(uvs);
+    out.colors = (any && all_colors).then_some(colors);
+    Ok(out)
+}
+
+fn check_count(got: usize, expected: usize) -> std::result::Result<(), String> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(format!("{got} entries for {expected} positions"))
+    }
+}
+
+/// The bytes of an accessor's elements: `(data, stride, element size)`, bounds checked.
+fn accessor_bytes<'b>(
+    accessor: &gltf::Accessor,
+    buffers: &'b [Vec<u8>],
+) -> std::result::Result<(&'b [u8], usize, usize), String> {
+    if accessor.sparse().is_some() {
+        return Err(format!(
+            "accessor {} is sparse (not supported)",
+            accessor.index()
+        ));
+    }
+    let view = accessor
+        .view()
+        .ok_or_else(|| format!("accessor {} has no buffer view", accessor.index()))?;
+    let component = accessor.data_type().size();
+    let element = component * accessor.dimensions().multiplicity();
+    let stride = view.stride().unwrap_or(element);
+    if stride < element {
+        return Err(format!(
+            "buffer view {} stride {stride} below element size {element}",
+            view.index()
+        ));
+    }
+    let buffer = buffers
+        .get(view.buffer().index())
+        .ok_or_else(|| format!("buffer {} is missing", view.buffer().index()))?;
+    let view_bytes = view
+        .offset()
+        .checked_add(view.length())
+        .and_then(|end| buffer.get(view.offset()..end))
+        .ok_or_else(|| {
+            format!(
+                "buffer view {} runs past buffer {}",
+                view.index(),
+                view.buffer().index()
+            )
+        })?;
+    let count = accessor.count();
+    let needed = match count {
+        0 => Some(0),
+        n => (n - 1)
+            .checked_mul(stride)
+            .and_then(|s| s.checked_add(element)),
+    };
+    let data = needed
+        .and_then(|n| accessor.offset().checked_add(n))
+        .and_then(|end| view_bytes.get(accessor.offset()..end))
+        .ok_or_else(|| {
+            format!(
+                "accessor {} runs past buffer view {}",
+                accessor.index(),
+                view.index()
+            )
+        })?;
+    Ok((data, stride, element))
+}
+
+/// Reads an accessor of `N`-vectors of floats (or normalised unsigned integers).
+fn read_floats<const N: usize>(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+) -> std::result::Result<Vec<[f32; N]>, String> {
+    if accessor.dimensions().multiplicity() != N {
+        return Err(format!(
+            "accessor {} has {:?}, expected {N} components",
+            accessor.index(),
+            accessor.dimensions()
+        ));
+    }
+    let kind = accessor.data_type();
+    let scale = match (kind, accessor.normalized()) {
+        (DataType::F32, _) => 1.0,
+        (DataType::U8, true) => 255.0,
+        (DataType::U16, true) => 65535.0,
+        _ => {
+            return Err(format!(
+                "accessor {} has component type {kind:?}, expected float",
+                accessor.index()
+            ));
+        }
+    };
+    let (data, stride, _) = accessor_bytes(accessor, buffers)?;
+    let size = kind.size();
+    let count = accessor.count();
+    let mut out = Vec::with_capacity(count);
+    for i in 0..count {
+        let mut v = [0f32; N];
+        for (c, slot) in v.iter_mut().enumerate() {
+            let at = i * stride + c * size;
+            let b = data.get(at..at + size).unwrap_or_default();
+            *slot = match kind {
+                DataType::F32 => b.try_into().map(f32::from_le_bytes).unwrap_or(f32::NAN),
+                DataType::U16 => {
+                    b.try_into()
+                        .map(u16::from_le_bytes)
+                        .map_or(f32::NAN, f32::from)
+                        / scale
+                }
+                _ => b.first().map_or(f32::NAN, |&x| f32::from(x)) / scale,
+            };
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Reads an index accessor (scalar u8, u16 or u32).
+fn read_indices(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+) -> std::result::Result<Vec<u32>, String> {
+    if accessor.dimensions() != Dimensions::Scalar {
+        return Err(format!("accessor {} must be SCALAR", accessor.index()));
+    }
+    let kind = accessor.data_type();
+    if !matches!(kind, DataType::U8 | DataType::U16 | DataType::U32) {
+        return Err(format!(
+            "accessor {} has component type {kind:?}, expected an unsigned integer",
+            accessor.index()
+        ));
+    }
+    let (data, stride, size) = accessor_bytes(accessor, buffers)?;
+    Ok((0..accessor.count())
+        .map(|i| {
+            let b = data.get(i * stride..i * stride + size).unwrap_or_default();
+            match kind {
+                DataType::U8 => b.first().map_or(u32::MAX, |&x| u32::from(x)),
+                DataType::U16 => b
+                    .try_into()
+                    .map_or(u32::MAX, |b| u32::from(u16::from_le_bytes(b))),
+                _ => b.try_into().map_or(u32::MAX, u32::from_le_bytes),
+            }
+        })
+        .collect())
+}
+
+/// `a · b` for column-major 4×4 matrices (`m[column][row]`, glTF's layout).
+fn multiply(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
+    std::array::from_fn(|col| {
+        std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[col][k]).sum())
+    })
+}
+
+fn transform_point(m: &[[f64; 4]; 4], p: &[f32; 3]) -> [f32; 3] {
+    let p = p.map(f64::from);
+    std::array::from_fn(|row| {
+        (m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row]) as f32
+    })
+}
+
+/// The 3×3 part's determinant (negative for a mirroring transform).
+fn determinant3(m: &[[f64; 4]; 4]) -> f64 {
+    let e = |r: usize, c: usize| m[c][r];
+    e(0, 0) * (e(1, 1) * e(2, 2) - e(1, 2) * e(2, 1))
+        - e(0, 1) * (e(1, 0) * e(2, 2) - e(1, 2) * e(2, 0))
+        + e(0, 2) * (e(1, 0) * e(2, 1) - e(1, 1) * e(2, 0))
+}
+
+/// Transforms a normal by the inverse-transpose of the 3×3 part (the cofactor matrix, up to
+/// the determinant's positive scale and sign) and renormalises it.
+fn transform_normal(m: &[[f64; 4]; 4], n: &[f32; 3]) -> [f32; 3] {
+    let e = |r: usize, c: usize| m[c][r];
+    // cof[r][c] = cofactor of entry (r, c).
+    let cof = |r: usize, c: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+        e(r1, c1) * e(r2, c2) - e(r1, c2) * e(r2, c1)
+    };
+    let sign = if determinant3(m) < 0.0 { -1.0 } else { 1.0 };
+    let n = n.map(f64::from);
+    let out: [f64; 3] =
+        std::array::from_fn(|r| sign * (0..3).map(|c| cof(r, c) * n[c]).sum::<f64>());
+    let length = out.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if length > 0.0 {
+        out.map(|x| (x / length) as f32)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Encodes a mesh as GLB: one node, one primitive (`TRIANGLES`, or `POINTS` without
+/// faces), f32 positions with min/max, normals/uvs/colours when present, u32 indices.
+pub(crate) fn write_glb_bytes(mesh: &MeshData) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut attributes = Vec::new();
+    let count = mesh.vertices.len();
+    let mut add = |bin: &mut Vec<u8>, data: Vec<u8>, accessor: String, target: u32| {
+        let offset = bin.len();
+        let length = data.len();
+        bin.extend(data);
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{length},"target":{target}}}"#
+        ));
+        accessors.push(accessor.replace("VIEW", &(views.len() - 1).to_string()));
+        accessors.len() - 1
+    };
+    let floats = |values: &mut dyn Iterator<Item = f32>| -> Vec<u8> {
+        values.flat_map(f32::to_le_bytes).collect()
+    };
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for v in &mesh.vertices {
+        for k in 0..3 {
+            min[k] = min[k].min(v[k]);
+            max[k] = max[k].max(v[k]);
+        }
+    }
+    if count > 0 {
+        let p = add(
+            &mut bin,
+            floats(&mut mesh.vertices.iter().flatten().copied()),
+            format!(
+                r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3","min":[{:?},{:?},{:?}],"max":[{:?},{:?},{:?}]}}"#,
+                min[0], min[1], min[2], max[0], max[1], max[2]
+            ),
+            34962,
+        );
+        attributes.push(format!(r#""POSITION":{p}"#));
+        if let Some(normals) = &mesh.normals {
+            let n = add(
+                &mut bin,
+                floats(&mut normals.iter().flatten().copied()),
+                format!(
+                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3"}}"#
+                ),
+                34962,
+            );
+            attributes.push(format!(r#""NORMAL":{n}"#));
+        }
+        if let Some(uvs) = &mesh.uvs {
+            let t = add(
+                &mut bin,
+                floats(&mut uvs.iter().flatten().copied()),
+                format!(
+                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC2"}}"#
+                ),
+                34962,
+            );
+            attributes.push(format!(r#""TEXCOORD_0":{t}"#));
+        }
+        if let Some(colors) = &mesh.colors {
+            let c = add(
+                &mut bin,
+                floats(&mut colors.iter().flatten().copied()),
+                format!(
+                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3"}}"#
+                ),
+                34962,
+            );
+            attributes.push(format!(r#""COLOR_0":{c}"#));
+        }
+    }
+    let mut primitive = format!(r#"{{"attributes":{{{}}}"#, attributes.join(","));
+    if mesh.triangles.is_empty() {
+        primitive += r#","mode":0}"#;
+    } else {
+        let indices = mesh.triangles.len() * 3;
+        let i = add(
+            &mut bin,
+            mesh.triangles
+                .iter()
+                .flatten()
+                .flat_map(|i| i.to_le_bytes())
+                .collect(),
+            format!(
+                r#"{{"bufferView":VIEW,"componentType":5125,"count":{indices},"type":"SCALAR"}}"#
+            ),
+            34963,
+        );
+        primitive += &format!(r#","indices":{i},"mode":4}}"#);
+    }
+    let (meshes, nodes) = if count > 0 {
+        (
+            format!(r#","meshes":[{{"primitives":[{primitive}]}}]"#),
+            r#"[{"mesh":0}]"#,
+        )
+    } else {
+        (String::new(), "[{}]")
+    };
+    let buffers = if bin.is_empty() {
+        String::new()
+    } else {
+        format!(
+            r#","buffers":[{{"byteLength":{}}}],"bufferViews":[{}],"accessors":[{}]"#,
+            bin.len(),
+            views.join(","),
+            accessors.join(",")
+        )
+    };
+    let mut json = format!(
+        r#"{{"asset":{{"version":"2.0","generator":"meshgnn-geometry"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":{nodes}{meshes}{buffers}}}"#
+    )
+    .into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
+    out.extend(json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+        out.extend(bin);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Error;
+
+    fn base64(bytes: &[u8]) -> String {
+        const TABLE: &[u8; 64] =
+            b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for chunk in bytes.chunks(3) {
+            let b = [
+                chunk[0],
+                *chunk.get(1).unwrap_or(&0),
+                *chunk.get(2).unwrap_or(&0),
+            ];
+            let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+            for i in 0..4 {
+                if i <= chunk.len() {
+                    out.push(TABLE[((n >> (18 - 6 * i)) & 63) as usize] as char);
+                } else {
+                    out.push('=');
+                }
+            }
+        }
+        out
+    }
+
+    /// A strip of 4 vertices under a translated parent and a mirroring, scaling child.
+    fn document(mode: u32, count: usize, uri: Option<&str>) -> String {
+        let mut buffer = Vec::new();
+        for p in [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 1.0],
+        ] {
+            p.iter().for_each(|x| buffer.extend(x.to_le_bytes()));
+        }
+        for _ in 0..4 {
+            [0.0f32, 0.0, 1.0]
+                .iter()
+                .for_each(|x| buffer.extend(x.to_le_bytes()));
+        }
+        [0u16, 1, 2, 3]
+            .iter()
+            .for_each(|i| buffer.extend(i.to_le_bytes()));
+        let uri = uri.map_or_else(
+            || format!("data:application/octet-stream;base64,{}", base64(&buffer)),
+            str::to_string,
+        );
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "nodes":[{{"translation":[10,0,0],"children":[1]}},{{"scale":[2,2,-2],"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2,"mode":{mode}}}]}}],
+            "buffers":[{{"byteLength":104,"uri":"{uri}"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":96}},{{"buffer":0,"byteOffset":96,"byteLength":8}}],
+            "accessors":[
+              {{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
+              {{"bufferView":0,"byteOffset":48,"componentType":5126,"count":4,"type":"VEC3"}},
+              {{"bufferView":1,"componentType":5123,"count":4,"type":"SCALAR"}}]}}"#
+        )
+    }
+
+    fn read(json: &str, points_ok: bool) -> Result<MeshData> {
+        read_gltf(json.as_bytes(), Path::new("t.gltf"), None, points_ok)
+    }
+
+    #[test]
+    fn strip_under_nested_mirroring_transforms() {
+        let mesh = read(&document(5, 4, None), false).unwrap();
+        assert_eq!(
+            mesh.vertices,
+            vec![
+                [10.0, 0.0, 0.0],
+                [12.0, 0.0, 0.0],
+                [10.0, 2.0, 0.0],
+                [12.0, 2.0, -2.0]
+            ]
+        );
+        // Strip (0 1 2), (2 1 3), flipped by the mirror.
+        assert_eq!(mesh.triangles, vec![[0, 2, 1], [2, 3, 1]]);
+        assert_eq!(mesh.normals, Some(vec![[0.0, 0.0, -1.0]; 4]));
+    }
+
+    #[test]
+    fn fan_is_converted() {
+        let mesh = read(&document(6, 4, None), false).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 2, 1], [0, 3, 2]]);
+    }
+
+    #[test]
+    fn points_are_an_error_for_meshes_and_vertices_for_clouds() {
+        match read(&document(0, 4, None), false) {
+            Err(Error::Format {
+                element, message, ..
+            }) => {
+                assert_eq!(element, "primitive 0 of mesh 0");
+                assert!(message.contains("Points"), "{message}");
+            }
+            other => panic!("expected an error, got {other:?}"),
+        }
+        assert_eq!(read(&document(0, 4, None), true).unwrap().vertices.len(), 4);
+    }
+
+    #[test]
+    fn out_of_range_accessor_and_missing_buffer_are_errors() {
+        match read(&document(4, 100, None), false) {
+            Err(Error::Format {
+                element, message, ..
+            }) => {
+                assert_eq!(element, "primitive 0 of mesh 0");
+                assert!(message.contains("runs past"), "{message}");
+            }
+            other => panic!("expected an error, got {other:?}"),
+        }
+        match read(&document(4, 4, Some("missing.bin")), false) {
+            Err(Error::Format { element, .. }) => assert_eq!(element, "glTF buffers"),
+            other => panic!("expected an error, got {other:?}"),
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let from_file = read_gltf(
+            document(4, 4, Some("missing.bin")).as_bytes(),
+            &dir.path().join("t.gltf"),
+            Some(dir.path()),
+            false,
+        );
+        assert!(matches!(from_file, Err(Error::Format { .. })));
+    }
+
+    #[test]
+    fn dangling_position_accessor_is_an_error_not_a_panic() {
+        // gltf-json's own validation would index accessors[7] and panic.
+        let json = document(4, 4, None).replace(r#""POSITION":0"#, r#""POSITION":7"#);
+        match read(&json, false) {
+            Err(Error::Format {
+                element, message, ..
+            }) => {
+                assert_eq!(element, "primitive 0 of mesh 0");
+                assert!(message.contains("POSITION accessor 7"), "{message}");
+            }
+            other => panic!("expected an error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn glb_writer_layout_and_read_back() {
+        let mesh = MeshData {
+            vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 2.0, -1.0]],
+            triangles: vec![[0, 1, 2]],
+            normals: Some(vec![[0.0, 0.0, 1.0]; 3]),
+            ..MeshData::default()
+        };
+        let glb = write_glb_bytes(&mesh);
+        assert_eq!(&glb[..4], b"glTF");
+        assert_eq!(glb.len() % 4, 0);
+        assert_eq!(
+            u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+            glb.len()
+        );
+        let (json, bin) = split_glb(&glb, Path::new("t.glb")).unwrap();
+        let json = std::str::from_utf8(json).unwrap();
+        assert!(
+            json.contains(r#""min":[0.0,0.0,-1.0],"max":[1.0,2.0,0.0]"#),
+            "{json}"
+        );
+        assert_eq!(bin.unwrap().len(), 36 + 36 + 12);
+        assert_eq!(
+            read_gltf(&glb, Path::new("t.glb"), None, false).unwrap(),
+            mesh
+        );
+    }
+
+    #[test]
+    fn bad_glb_headers_are_errors() {
+        let glb = write_glb_bytes(&MeshData {
+            vertices: vec![[0.0; 3]; 3],
+            triangles: vec![[0, 1, 2]],
+            ..MeshData::default()
+        });
+        let mut short = glb.clone();
+        short[8..12].copy_from_slice(&4u32.to_le_bytes());
+        let mut long = glb.clone();
+        long[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        for bytes in [&glb[..10], &short[..], &long[..], &glb[..glb.len() - 4]] {
+            assert!(matches!(
+                read_gltf(bytes, Path::new("t.glb"), None, false),
+                Err(Error::Format { .. })
+            ));
+        }
+    }
+}

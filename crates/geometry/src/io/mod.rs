@@ -1,0 +1,26 @@
+//! Reading and writing meshes and point clouds: OBJ, PLY (ASCII and binary), OFF, glTF/GLB
+//! and XYZ, chosen by file extension. Readers parse the whole file from one byte slice and
+//! never panic on malformed input; writers are atomic (temporary file + rename).
+
+mod ascii_scan;
+mod atomic_write;
+mod format;
+mod format_error;
+mod gltf;
+mod mesh_data;
+mod obj;
+mod off;
+mod ply;
+mod read_mesh;
+mod read_point_cloud;
+mod write_mesh;
+mod write_point_cloud;
+mod xyz;
+
+pub use atomic_write::atomic_write;
+pub use format::MeshFormat;
+pub use ply::PlyEncoding;
+pub use read_mesh::{read_mesh, read_mesh_bytes};
+pub use read_point_cloud::{read_point_cloud, read_point_cloud_bytes};
+pub use write_mesh::{write_mesh, write_ply};
+pub use write_point_cloud::write_point_cloud;

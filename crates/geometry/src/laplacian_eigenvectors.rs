@@ -1,0 +1,558 @@
+//! The first `k` eigenpairs of the cotangent Laplacian, `L x = λ M x` with the lumped mass
+//! matrix `M` — the spectral basis of the Laplacian error LE (thesis eq. 6.16: MSE over the
+//! first 150 eigenvectors) and of spectral mesh processing in general (Lévy, "Laplace-Beltrami
+//! eigenfunctions", SMI 2006; Vallet and Lévy, "Spectral geometry processing with manifold
+//! harmonics", Eurographics 2008).
+//!
+//! # Method
+//! With `M` diagonal the problem is the symmetric `A y = λ y`, `A = M^{-1/2} L M^{-1/2}`,
+//! `x = M^{-1/2} y`. Shift-invert around a small negative shift `σ` turns the smallest `λ`
+//! into the largest `μ = 1/(λ − σ)` of `M^{1/2} (L − σM)^{-1} M^{1/2}`; block Lanczos with full
+//! re-orthogonalisation (twice, BLAS-3 through faer) builds a Krylov basis, one sparse
+//! Cholesky factorisation of `L − σM` (faer, AMD fill-reducing ordering) serves every solve,
+//! and a dense symmetric eigen-solve of the small projected matrix gives Ritz pairs; the basis
+//! is extended until every wanted Ritz residual is below `1e-9 μ`. Memory is `#V × O(k)`,
+//! never `#V²`.
+//!
+//! Each connected component is solved on its own (its eigenpairs are those of the whole
+//! operator, and a zero eigenvalue per component would otherwise defeat single-vector
+//! Krylov methods); the `k` smallest over all components are kept. Components of at most
+//! 600 vertices use a dense eigen-solve.
+//!
+//! # Conventions
+//! - `values` ascending (`≥ 0` up to rounding; one zero per component); `vectors` `#V×k`
+//!   M-orthonormal, `Xᵀ M X = I`, column `i` for `values[i]`.
+//! - Sign: the entry of largest magnitude of each vector is positive (the first such entry on
+//!   ties), so the result is reproducible and comparable across meshes.
+//! - Vertices with zero mass (unreferenced, or only in degenerate faces) are not part of the
+//!   surface: their rows are zero.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Accum, Mat, MatRef, Par, Side};
+use petgraph::unionfind::UnionFind;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+use crate::TriMesh;
+use crate::cotangent_laplacian::cotangent_laplacian;
+use crate::error::{Error, Result};
+use crate::mass_matrix::lumped_mass_matrix;
+
+/// The first `k` generalised eigenpairs of the cotangent Laplacian.
+#[derive(Debug, Clone)]
+pub struct LaplacianEigenpairs {
+    /// Eigenvalues `λ_0 ≤ … ≤ λ_{k−1}`.
+    pub values: Vec<f64>,
+    /// Eigenvectors, `#V×k`, M-orthonormal, column `i` for `values[i]`.
+    pub vectors: Mat<f64>,
+}
+
+/// Components up to this size are solved densely.
+const DENSE_LIMIT: usize = 600;
+/// Relative Ritz residual accepted for convergence.
+const TOLERANCE: f64 = 1e-9;
+/// Largest Lanczos block.
+const MAX_BLOCK: usize = 24;
+
+/// The `k` smallest eigenpairs of `L x = λ M x` (cotangent `L`, lumped `M`) of `mesh`; see the
+/// module documentation. Fails on a mesh without faces of positive area, on `k = 0`, on `k`
+/// larger than the number of surface vertices, or if the solver does not converge.
+///
+/// ```
+/// use meshgnn_geometry::{icosphere, laplacian_eigenvectors};
+/// let pairs = laplacian_eigenvectors(&icosphere(3), 4)?;
+/// assert!(pairs.values[0].abs() < 1e-8);
+/// // The l = 1 spherical harmonics: λ ≈ l(l + 1) = 2, three times.
+/// assert!(pairs.values[1..].iter().all(|&l| (l - 2.0).abs() < 0.02));
+/// assert_eq!(pairs.vectors.shape(), (642, 4));
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn laplacian_eigenvectors(mesh: &TriMesh, k: usize) -> Result<LaplacianEigenpairs> {
+    if k == 0 {
+        return Err(Error::InvalidParameter {
+            name: "k",
+            message: "ask for at least one eigenpair".into(),
+        });
+    }
+    let mass = lumped_mass_matrix(mesh);
+    let active = mass.iter().filter(|&&m| m > 0.0).count();
+    if active == 0 {
+        return Err(Error::Empty {
+            what: "mesh surface (no face of positive area)",
+        });
+    }
+    if k > active {
+        return Err(Error::InvalidParameter {
+            name: "k",
+            message: format!("asked for {k} eigenpairs of a surface with {active} vertices"),
+        });
+    }
+    let laplacian = cotangent_laplacian(mesh)?;
+    let components = surface_components(&laplacian, &mass);
+    // (λ, component, local index) of every candidate, and the local eigenvectors.
+    let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
+    let mut solutions: Vec<(Vec<f64>, Mat<f64>)> = Vec::with_capacity(components.len());
+    for (c, vertices) in components.iter().enumerate() {
+        let want = k.min(vertices.len());
+        let (values, vectors) = component_eigenpairs(&laplacian, &mass, vertices, want)?;
+        candidates.extend(values.iter().enumerate().map(|(i, &l)| (l, c, i)));
+        solutions.push((values, vectors));
+    }
+    candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    candidates.truncate(k);
+    let mut vectors = Mat::<f64>::zeros(mesh.vertex_count(), k);
+    let mut values = Vec::with_capacity(k);
+    for (column, &(value, c, i)) in candidates.iter().enumerate() {
+        values.push(value);
+        let local = solutions[c].1.col(i);
+        let mut out = vectors.col_mut(column);
+        for (row, &v) in components[c].iter().enumerate() {
+            out[v] = local[row] / mass[v].sqrt();
+        }
+        // Sign convention: largest-magnitude entry positive.
+        let mut best = (0usize, 0.0f64);
+        for row in 0..out.nrows() {
+            if out[row].abs() > best.1.abs() {
+                best = (row, out[row]);
+            }
+        }
+        if best.1 < 0.0 {
+            for row in 0..out.nrows() {
+                out[row] = -out[row];
+            }
+        }
+    }
+    Ok(LaplacianEigenpairs { values, vectors })
+}
+
+/// Vertices with positive mass grouped by the connectivity of `laplacian`'s stored entries,
+/// each group ascending, groups ordered by their smallest vertex.
+fn surface_components(laplacian: &SparseColMat<usize, f64>, mass: &[f64]) -> Vec<Vec<usize>> {
+    let n = mass.len();
+    let mut sets = UnionFind::<usize>::new(n);
+    let symbolic = laplacian.symbolic();
+    for col in 0..n {
+        for &row in symbolic.row_idx_of_col_raw(col) {
+            sets.union(row, col);
+        }
+    }
+    let roots = sets.into_labeling();
+    let mut index_of_root = vec![usize::MAX; n];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for v in (0..n).filter(|&v| mass[v] > 0.0) {
+        let root = roots[v];
+        if index_of_root[root] == usize::MAX {
+            index_of_root[root] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[index_of_root[root]].push(v);
+    }
+    groups
+}
+
+/// The `want` smallest eigenpairs `(λ ascending, y: n×want orthonormal)` of
+/// `M^{-1/2} L M^{-1/2}` restricted to `vertices`.
+fn component_eigenpairs(
+    laplacian: &SparseColMat<usize, f64>,
+    mass: &[f64],
+    vertices: &[usize],
+    want: usize,
+) -> Result<(Vec<f64>, Mat<f64>)> {
+    let n = vertices.len();
+    let mut local = vec![usize::MAX; mass.len()];
+    for (i, &v) in vertices.iter().enumerate() {
+        local[v] = i;
+    }
+    let sqrt_mass: Vec<f64> = vertices.iter().map(|&v| mass[v].sqrt()).collect();
+    // The component's block of L, in local indices: (row, col, value).
+    let mut entries = Vec::new();
+    for (j, &v) in vertices.iter().enumerate() {
+        let rows = laplacian.symbolic().row_idx_of_col_raw(v);
+        let vals = laplacian.val_of_col(v);
+        for (&row, &value) in rows.iter().zip(vals) {
+            if let Some(&i) = local.get(row).filter(|&&i| i != usize::MAX) {
+                entries.push(Triplet::new(i, j, value));
+            }
+        }
+    }
+    if n <= DENSE_LIMIT {
+        return dense_eigenpairs(&entries, &sqrt_mass, want);
+    }
+    // Shift relative to the typical eigenvalue scale mean(L_ii / M_ii).
+    let scale = entries
+        .iter()
+        .filter(|t| t.row == t.col)
+        .map(|t| t.val / (sqrt_mass[t.row] * sqrt_mass[t.row]))
+        .sum::<f64>()
+        / n as f64;
+    let sigma = -1e-8 * scale.max(f64::MIN_POSITIVE);
+    let shifted: Vec<Triplet<usize, usize, f64>> = entries
+        .iter()
+        .map(|t| {
+            let diagonal = if t.row == t.col {
+                -sigma * sqrt_mass[t.row] * sqrt_mass[t.row]
+            } else {
+                0.0
+            };
+            Triplet::new(t.row, t.col, t.val + diagonal)
+        })
+        .collect();
+    let matrix =
+        SparseColMat::try_new_from_triplets(n, n, &shifted).map_err(|e| Error::Solver {
+            solver: "laplacian eigenvectors",
+            message: format!("assembling L - σM: {e:?}"),
+        })?;
+    let factor = matrix.sp_cholesky(Side::Lower).map_err(|e| Error::Solver {
+        solver: "laplacian eigenvectors",
+        message: format!("Cholesky factorisation of L - σM failed: {e:?}"),
+    })?;
+    // op(Y) = M^{1/2} (L − σM)^{-1} M^{1/2} Y, in place.
+    let op = |mut y: Mat<f64>| -> Mat<f64> {
+        scale_rows(&mut y, &sqrt_mass);
+        factor.solve_in_place(y.as_mut());
+        scale_rows(&mut y, &sqrt_mass);
+        y
+    };
+    let (mu, vectors) = block_lanczos(n, want, op)?;
+    let values = mu.iter().map(|&m| sigma + 1.0 / m).collect();
+    Ok((values, vectors))
+}
+
+/// Multiplies row `i` of `y` by `factors[i]`.
+fn scale_rows(y: &mut Mat<f64>, factors: &[f64]) {
+    for j in 0..y.ncols() {
+        let mut col = y.col_mut(j);
+        for (i, &f) in factors.iter().enumerate() {
+            col[i] *= f;
+        }
+    }
+}
+
+/// Dense solve of `M^{-1/2} L M^{-1/2}` for a small component.
+fn dense_eigenpairs(
+    entries: &[Triplet<usize, usize, f64>],
+    sqrt_mass: &[f64],
+    want: usize,
+) -> Result<(Vec<f64>, Mat<f64>)> {
+    let n = sqrt_mass.len();
+    let mut a = Mat::<f64>::zeros(n, n);
+    for t in entries {
+        a[(t.row, t.col)] += t.val / (sqrt_mass[t.row] * sqrt_mass[t.col]);
+    }
+    let eigen = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::Solver {
+            solver: "laplacian eigenvectors",
+            message: format!("dense eigen-solve did not converge: {e:?}"),
+        })?;
+    let values = (0..want).map(|i| eigen.S()[i]).collect();
+    let vectors = eigen.U().subcols(0, want).to_owned();
+    Ok((values, vectors))
+}
+
+/// The `want` largest eigenpairs `(μ descending, vectors n×want)` of the symmetric positive
+/// definite operator `op` by block Lanczos with full re-orthogonalisation.
+fn block_lanczos(
+    n: usize,
+    want: usize,
+    op: impl Fn(Mat<f64>) -> Mat<f64>,
+) -> Result<(Vec<f64>, Mat<f64>)> {
+    let block = want.clamp(1, MAX_BLOCK);
+    let capacity = n.min(4 * want + 8 * block + 64);
+    let mut basis = Mat::<f64>::zeros(n, capacity);
+    let mut projected = Mat::<f64>::zeros(capacity, capacity);
+    let mut rng = StdRng::seed_from_u64(0x5eed_1a9c);
+    let mut next = Mat::<f64>::from_fn(n, block, |_, _| rng.random_range(-1.0..1.0));
+    let (v0, _) = orthonormalize(&mut next, basis.subcols(0, 0), n, &mut rng);
+    basis.subcols_mut(0, v0.ncols()).copy_from(&v0);
+    let mut size = v0.ncols();
+    let mut current = (0, size);
+    // Ritz checks cost O(size³): start once the basis can hold the wanted pairs plus a block,
+    // then space them geometrically (every max(block, size/8) new vectors).
+    let mut next_check = want + block;
+    loop {
+        let (start, width) = current;
+        let mut w = op(basis.subcols(start, width).to_owned());
+        // Two passes of block classical Gram-Schmidt against the whole basis.
+        let q = basis.subcols(0, size);
+        let mut coefficients = Mat::<f64>::zeros(size, width);
+        for _ in 0..2 {
+            let c = q.transpose() * &w;
+            faer::linalg::matmul::matmul(w.as_mut(), Accum::Add, q, &c, -1.0, Par::rayon(0));
+            coefficients += &c;
+        }
+        projected
+            .submatrix_mut(0, start, size, width)
+            .copy_from(&coefficients);
+        // The new block V and R with W = V R (exactly representable once the space is full).
+        let (fresh, r) = orthonormalize(&mut w, q, n - size, &mut rng);
+        if size >= next_check || fresh.ncols() == 0 || size + fresh.ncols() > capacity {
+            next_check = size + block.max(size / 8);
+            let h = symmetrized(projected.submatrix(0, 0, size, size));
+            let eigen = h
+                .self_adjoint_eigen(Side::Lower)
+                .map_err(|e| Error::Solver {
+                    solver: "laplacian eigenvectors",
+                    message: format!("projected eigen-solve did not converge: {e:?}"),
+                })?;
+            let s = eigen.U();
+            // Ritz values descending; the residual of Ritz pair i is |R s_i(last block)|.
+            let theta: Vec<f64> = (0..size).map(|i| eigen.S()[size - 1 - i]).collect();
+            let converged = (0..want).all(|i| {
+                let tail = s.col(size - 1 - i).subrows(start, width);
+                (&r * tail).norm_l2() <= TOLERANCE * theta[i].abs()
+            });
+            if converged || fresh.ncols() == 0 {
+                let mut selected = Mat::<f64>::zeros(size, want);
+                for i in 0..want {
+                    selected.col_mut(i).copy_from(s.col(size - 1 - i));
+                }
+                let vectors = basis.subcols(0, size) * &selected;
+                return Ok((theta[..want].to_vec(), vectors));
+            }
+            if size + fresh.ncols() > capacity {
+                return Err(Error::Solver {
+                    solver: "laplacian eigenvectors",
+                    message: format!(
+                        "block Lanczos did not converge within a basis of {capacity} vectors"
+                    ),
+                });
+            }
+        }
+        projected
+            .submatrix_mut(size, start, r.nrows(), width)
+            .copy_from(&r);
+        basis.subcols_mut(size, fresh.ncols()).copy_from(&fresh);
+        current = (size, fresh.ncols());
+        size += fresh.ncols();
+    }
+}
+
+/// `(H + Hᵀ) / 2`.
+fn symmetrized(h: MatRef<'_, f64>) -> Mat<f64> {
+    Mat::from_fn(h.nrows(), h.ncols(), |i, j| 0.5 * (h[(i, j)] + h[(j, i)]))
+}
+
+/// Modified Gram-Schmidt (twice) of `w` against `q` and itself, keeping `room` columns:
+/// returns `(V, R)` with `W ≈ V R` for the kept part. A column that is numerically dependent
+/// is replaced by a random vector orthogonal to everything (its row of `R` is zero), so the
+/// block keeps its width through invariant subspaces.
+fn orthonormalize(
+    w: &mut Mat<f64>,
+    q: MatRef<'_, f64>,
+    room: usize,
+    rng: &mut StdRng,
+) -> (Mat<f64>, Mat<f64>) {
+    let n = w.nrows();
+    let width = w.ncols();
+    let kept = room.min(width).min(n.saturating_sub(q.ncols()));
+    let mut v = Mat::<f64>::zeros(n, kept);
+    let mut r = Mat::<f64>::zeros(kept, width);
+    let mut filled = 0usize;
+    for j in 0..width {
+        let original = w.col(j).norm_l2();
+        let mut col = w.col(j).to_owned();
+        for _ in 0..2 {
+            for i in 0..filled {
+                let c = v.col(i).transpose() * &col;
+                col -= c * v.col(i);
+                r[(i, j)] += c;
+            }
+        }
+        let norm = col.norm_l2();
+        if filled < kept {
+            if norm > 1e-10 * original.max(f64::MIN_POSITIVE) && norm > 0.0 {
+                r[(filled, j)] = norm;
+                v.col_mut(filled).copy_from(col * (1.0 / norm));
+            } else {
+                let x = random_orthogonal(q, v.subcols(0, filled), rng);
+                v.col_mut(filled).copy_from(&x);
+            }
+            filled += 1;
+        }
+    }
+    (v, r)
+}
+
+/// A unit random vector orthogonal to the columns of `q` and `v`.
+fn random_orthogonal(q: MatRef<'_, f64>, v: MatRef<'_, f64>, rng: &mut StdRng) -> faer::Col<f64> {
+    loop {
+        let mut x = faer::Col::<f64>::from_fn(q.nrows(), |_| rng.random_range(-1.0..1.0));
+        for _ in 0..2 {
+            for basis in [q, v] {
+                let c = basis.transpose() * &x;
+                x -= basis * &c;
+            }
+        }
+        let norm = x.norm_l2();
+        if norm > 1e-8 {
+            return x * (1.0 / norm);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{grid_plane, icosphere};
+
+    /// `‖L x − λ M x‖ / ‖M x‖` for every pair, and `max |XᵀMX − I|`.
+    fn check_pairs(mesh: &TriMesh, pairs: &LaplacianEigenpairs) -> (f64, f64) {
+        let l = cotangent_laplacian(mesh).unwrap();
+        let m = lumped_mass_matrix(mesh);
+        let x = &pairs.vectors;
+        let lx = &l * x;
+        let mut residual = 0.0f64;
+        for j in 0..x.ncols() {
+            let (mut r, mut s) = (0.0, 0.0);
+            for i in 0..x.nrows() {
+                let mx = m[i] * x[(i, j)];
+                r += (lx[(i, j)] - pairs.values[j] * mx).powi(2);
+                s += mx * mx;
+            }
+            residual = residual.max((r / s).sqrt() / pairs.values[j].abs().max(1.0));
+        }
+        let mut gram_error = 0.0f64;
+        for a in 0..x.ncols() {
+            for b in 0..x.ncols() {
+                let g: f64 = (0..x.nrows()).map(|i| x[(i, a)] * m[i] * x[(i, b)]).sum();
+                let expected = if a == b { 1.0 } else { 0.0 };
+                gram_error = gram_error.max((g - expected).abs());
+            }
+        }
+        (residual, gram_error)
+    }
+
+    #[test]
+    fn sphere_spectrum_groups_into_spherical_harmonics() {
+        let sphere = icosphere(4);
+        // l = 0..4: multiplicities 1, 3, 5, 7, 9.
+        let pairs = laplacian_eigenvectors(&sphere, 25).unwrap();
+        let mut next = 0;
+        for l in 0..5usize {
+            let exact = (l * (l + 1)) as f64;
+            for _ in 0..2 * l + 1 {
+                let value = pairs.values[next];
+                // Discretisation error of the subdivision-4 icosphere: 0.7 % at l = 4 (λ ≈ 19.87).
+                assert!(
+                    (value - exact).abs() <= 1e-2 * exact + 1e-8,
+                    "λ{next} = {value}, l = {l}"
+                );
+                next += 1;
+            }
+        }
+        let (residual, gram) = check_pairs(&sphere, &pairs);
+        assert!(residual < 1e-6, "residual {residual}");
+        assert!(gram < 1e-9, "XᵀMX − I: {gram}");
+    }
+
+    #[test]
+    fn lanczos_matches_the_dense_solution() {
+        // 642 vertices: above the dense limit, so the Lanczos path runs.
+        let sphere = icosphere(3);
+        let bumped: Vec<[f32; 3]> = sphere
+            .vertices()
+            .iter()
+            .map(|p| {
+                let r = 1.0 + 0.2 * (3.0 * p[0]).sin() * (2.0 * p[1]).cos();
+                p.map(|x| x * r)
+            })
+            .collect();
+        let mesh = sphere.with_vertices(bumped).unwrap();
+        let k = 40;
+        let pairs = laplacian_eigenvectors(&mesh, k).unwrap();
+        let l = cotangent_laplacian(&mesh).unwrap();
+        let m = lumped_mass_matrix(&mesh);
+        let entries: Vec<Triplet<usize, usize, f64>> = (0..l.ncols())
+            .flat_map(|c| {
+                let rows = l.symbolic().row_idx_of_col_raw(c).to_vec();
+                let vals = l.val_of_col(c).to_vec();
+                rows.into_iter()
+                    .zip(vals)
+                    .map(move |(r, v)| Triplet::new(r, c, v))
+            })
+            .collect();
+        let sqrt_mass: Vec<f64> = m.iter().map(|x| x.sqrt()).collect();
+        let (dense, _) = dense_eigenpairs(&entries, &sqrt_mass, k).unwrap();
+        for (a, b) in pairs.values.iter().zip(&dense) {
+            assert!((a - b).abs() < 1e-8 * b.max(1.0), "{a} vs {b}");
+        }
+        let (residual, gram) = check_pairs(&mesh, &pairs);
+        assert!(residual < 1e-6 && gram < 1e-9, "{residual} {gram}");
+    }
+
+    #[test]
+    fn square_with_boundary_has_neumann_spectrum() {
+        // Unit square, free boundary: λ = π²(a² + b²) → 0, π², π², 2π², 4π², 4π².
+        let plane = grid_plane(40, 40);
+        let pairs = laplacian_eigenvectors(&plane, 6).unwrap();
+        let pi2 = std::f64::consts::PI.powi(2);
+        for (value, expected) in pairs.values.iter().zip([0.0, 1.0, 1.0, 2.0, 4.0, 4.0]) {
+            assert!(
+                (value - expected * pi2).abs() < 0.01 * pi2 * expected + 1e-8,
+                "{value}"
+            );
+        }
+    }
+
+    #[test]
+    fn two_components_give_two_zero_eigenvalues_and_unused_vertices_are_zero() {
+        let (mut v, mut f, ..) = icosphere(3).into_parts();
+        let offset = v.len() as u32;
+        let shifted: Vec<_> = v
+            .iter()
+            .map(|p| [p[0] * 2.0 + 5.0, p[1] * 2.0, p[2] * 2.0])
+            .collect();
+        let faces: Vec<_> = f.iter().map(|t| t.map(|i| i + offset)).collect();
+        v.extend(shifted);
+        f.extend(faces);
+        v.push([9.0; 3]);
+        let mesh = TriMesh::new(v, f).unwrap();
+        let pairs = laplacian_eigenvectors(&mesh, 6).unwrap();
+        assert!(pairs.values[0].abs() < 1e-8 && pairs.values[1].abs() < 1e-8);
+        // The big sphere (radius 2) has λ = l(l+1)/4: its l = 1 triple comes first.
+        for value in &pairs.values[2..5] {
+            assert!((value - 0.5).abs() < 0.01, "{value}");
+        }
+        assert_eq!(pairs.vectors[(mesh.vertex_count() - 1, 3)], 0.0);
+        let (residual, gram) = check_pairs(&mesh, &pairs);
+        assert!(residual < 1e-6 && gram < 1e-9, "{residual} {gram}");
+    }
+
+    #[test]
+    fn same_result_for_any_thread_count() {
+        let mesh = icosphere(3);
+        let reference = laplacian_eigenvectors(&mesh, 20).unwrap();
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let again = pool.install(|| laplacian_eigenvectors(&mesh, 20).unwrap());
+            assert_eq!(reference.values, again.values);
+            assert_eq!(reference.vectors, again.vectors);
+        }
+    }
+
+    #[test]
+    fn invalid_requests_are_errors() {
+        let sphere = icosphere(1);
+        assert!(matches!(
+            laplacian_eigenvectors(&sphere, 0),
+            Err(Error::InvalidParameter { name: "k", .. })
+        ));
+        assert!(matches!(
+            laplacian_eigenvectors(&sphere, 43),
+            Err(Error::InvalidParameter { name: "k", .. })
+        ));
+        assert!(matches!(
+            laplacian_eigenvectors(&TriMesh::default(), 1),
+            Err(Error::Empty { .. })
+        ));
+        // k = #V works (dense path) and gives a full M-orthonormal basis.
+        let pairs = laplacian_eigenvectors(&sphere, 42).unwrap();
+        let (_, gram) = check_pairs(&sphere, &pairs);
+        assert!(gram < 1e-9);
+    }
+}

@@ -1,0 +1,120 @@
+//! Welding of vertices that share an exact position (unwelded triangle soups, as STL-like
+//! exporters write them, and meshes split on attribute seams), before QEM decimation.
+//!
+//! Vertices are merged when their positions are bit-identical (with `-0.0 == 0.0`) and, when
+//! texture coordinates are given, their UVs are bit-identical too: vertices at one position with
+//! different UVs stay apart and are flagged as *seam* vertices, which decimation keeps fixed so
+//! that textures do not tear.
+
+use rayon::prelude::*;
+
+/// The result of [`weld_by_position`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Welding {
+    /// `#V`: the welded vertex each original vertex became.
+    pub map: Vec<u32>,
+    /// `#W`: the first original vertex of each welded vertex (welded ids follow its order).
+    pub representatives: Vec<u32>,
+    /// `#W`: true when another welded vertex has the same position (a UV seam).
+    pub seam: Vec<bool>,
+}
+
+impl Welding {
+    /// True when at least two vertices were merged.
+    pub fn merged_any(&self) -> bool {
+        self.representatives.len() < self.map.len()
+    }
+}
+
+/// The bit pattern of a coordinate with `-0.0` folded onto `0.0`.
+fn key(x: f32) -> u32 {
+    if x == 0.0 { 0 } else { x.to_bits() }
+}
+
+/// Welds `vertices: #V×3` by exact position (and exact `uvs: #V×2` when given).
+/// O(V log V), parallel sort; deterministic.
+pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) -> Welding {
+    let uv_key = |i: usize| -> [u32; 2] {
+        uvs.and_then(|u| u.get(i))
+            .map_or([0, 0], |uv| [key(uv[0]), key(uv[1])])
+    };
+    let mut order: Vec<([u32; 3], [u32; 2], u32)> = vertices
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| ([key(p[0]), key(p[1]), key(p[2])], uv_key(i), i as u32))
+        .collect();
+    // Keys plus index are unique, so the unstable sort is deterministic.
+    order.par_sort_unstable();
+
+    let n = vertices.len();
+    let mut representative = vec![0u32; n];
+    let mut seam_original = vec![false; n];
+    let mut start = 0;
+    while start < order.len() {
+        let pos = order[start].0;
+        let mut end = start;
+        while end < order.len() && order[end].0 == pos {
+            end += 1;
+        }
+        let group = &order[start..end];
+        let several_uvs = group.iter().any(|g| g.1 != group[0].1);
+        let mut k = 0;
+        while k < group.len() {
+            let rep = group[k].2;
+            let mut m = k;
+            while m < group.len() && group[m].1 == group[k].1 {
+                representative[group[m].2 as usize] = rep;
+                seam_original[group[m].2 as usize] = several_uvs;
+                m += 1;
+            }
+            k = m;
+        }
+        start = end;
+    }
+
+    let mut map = vec![0u32; n];
+    let mut representatives = Vec::new();
+    let mut seam = Vec::new();
+    for i in 0..n {
+        let rep = representative[i] as usize;
+        if rep == i {
+            map[i] = representatives.len() as u32;
+            representatives.push(i as u32);
+            seam.push(seam_original[i]);
+        } else {
+            // The representative is the smallest index of its group, already assigned.
+            map[i] = map[rep];
+        }
+    }
+    Welding {
+        map,
+        representatives,
+        seam,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welds_duplicates_and_flags_uv_seams() {
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [-0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+        ];
+        let w = weld_by_position(&v, None);
+        assert_eq!(w.map, vec![0, 1, 0, 1, 2]);
+        assert_eq!(w.representatives, vec![0, 1, 4]);
+        assert!(w.merged_any());
+        assert_eq!(w.seam, vec![false; 3]);
+
+        let uv = vec![[0.0, 0.0], [0.5, 0.0], [0.0, 0.0], [0.7, 0.0], [1.0, 1.0]];
+        let w = weld_by_position(&v, Some(&uv));
+        assert_eq!(w.map, vec![0, 1, 0, 2, 3]);
+        assert_eq!(w.seam, vec![false, true, true, false]);
+    }
+}

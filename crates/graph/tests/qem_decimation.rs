@@ -1,0 +1,368 @@
+//! Known-answer and invariant tests of QEM decimation.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::collections::HashMap;
+
+use meshgnn_geometry::{TriMesh, grid_plane, icosphere, subdivided_cube};
+use meshgnn_graph::{Decimation, DecimationOptions, Error, StopReason, Target, decimate};
+
+fn options(target: Target) -> DecimationOptions {
+    DecimationOptions {
+        target,
+        ..Default::default()
+    }
+}
+
+/// An icosphere with deterministic radial noise of relative amplitude `amp`.
+fn noisy_sphere(subdivisions: u32, amp: f32) -> TriMesh {
+    let sphere = icosphere(subdivisions);
+    let vertices = sphere
+        .vertices()
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let h = ((i as f32 * 12.9898).sin() * 43758.547).fract();
+            p.map(|x| x * (1.0 + amp * h))
+        })
+        .collect();
+    sphere.with_vertices(vertices).unwrap()
+}
+
+/// (boundary edges, non-manifold edges, directed edges used twice: inconsistent orientation).
+fn edge_defects(mesh: &TriMesh) -> (usize, usize, usize) {
+    let mut undirected: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for t in mesh.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *undirected.entry((a.min(b), a.max(b))).or_default() += 1;
+            *directed.entry((a, b)).or_default() += 1;
+        }
+    }
+    let boundary = undirected.values().filter(|&&c| c == 1).count();
+    let non_manifold = undirected.values().filter(|&&c| c > 2).count();
+    let misoriented = directed.values().filter(|&&c| c > 1).count();
+    (boundary, non_manifold, misoriented)
+}
+
+fn assert_closed_manifold(mesh: &TriMesh) {
+    let (boundary, non_manifold, misoriented) = edge_defects(mesh);
+    assert_eq!((boundary, non_manifold, misoriented), (0, 0, 0));
+    let edges = 3 * mesh.face_count() / 2;
+    let used = {
+        let mut seen = vec![false; mesh.vertex_count()];
+        mesh.triangles()
+            .iter()
+            .flatten()
+            .for_each(|&v| seen[v as usize] = true);
+        seen.iter().filter(|&&s| s).count()
+    };
+    // Euler characteristic of a sphere.
+    assert_eq!(used as i64 - edges as i64 + mesh.face_count() as i64, 2);
+}
+
+#[test]
+fn cube_collapses_to_its_twelve_corner_triangles() {
+    let out = decimate(&subdivided_cube(8), &options(Target::Faces(12))).unwrap();
+    assert_eq!(out.mesh.face_count(), 12);
+    assert_eq!(out.mesh.vertex_count(), 8);
+    assert!(out.error_distance < 1e-5, "{}", out.error_distance);
+    assert_eq!(out.stop_reason, StopReason::TargetReached);
+    let mut corners: Vec<[i32; 3]> = out
+        .mesh
+        .vertices()
+        .iter()
+        .map(|p| {
+            for x in p {
+                assert!((x.abs() - 1.0).abs() < 1e-5, "{p:?} is not a corner");
+            }
+            p.map(|x| x.signum() as i32)
+        })
+        .collect();
+    corners.sort();
+    corners.dedup();
+    assert_eq!(corners.len(), 8);
+    assert_closed_manifold(&out.mesh);
+}
+
+#[test]
+fn grid_collapses_to_two_triangles_on_its_corners() {
+    let out = decimate(&grid_plane(16, 16), &options(Target::Faces(2))).unwrap();
+    assert_eq!(out.mesh.face_count(), 2);
+    let mut corners: Vec<[u32; 3]> = out
+        .mesh
+        .vertices()
+        .iter()
+        .map(|p| p.map(|x| (x * 1e4).round() as u32))
+        .collect();
+    corners.sort();
+    assert_eq!(
+        corners,
+        vec![[0, 0, 0], [0, 10000, 0], [10000, 0, 0], [10000, 10000, 0]]
+    );
+}
+
+#[test]
+fn open_disk_keeps_its_boundary() {
+    let grid = grid_plane(24, 24);
+    let bumped = grid
+        .vertices()
+        .iter()
+        .map(|p| {
+            let z = 0.2 * (std::f32::consts::PI * p[0]).sin() * (std::f32::consts::PI * p[1]).sin();
+            [p[0], p[1], z]
+        })
+        .collect();
+    let mesh = grid.with_vertices(bumped).unwrap();
+    let out = decimate(&mesh, &options(Target::Ratio(0.1))).unwrap();
+    let (boundary, non_manifold, misoriented) = edge_defects(&out.mesh);
+    assert_eq!((non_manifold, misoriented), (0, 0));
+    assert!(boundary >= 4);
+    // Every boundary edge lies on the unit square's perimeter; together they span it.
+    let mut count: HashMap<(u32, u32), usize> = HashMap::new();
+    for t in out.mesh.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let v = out.mesh.vertices();
+    let on_side = |p: [f32; 3]| {
+        p.iter()
+            .take(2)
+            .any(|x| x.abs() < 1e-5 || (x - 1.0).abs() < 1e-5)
+            && p[2].abs() < 1e-5
+    };
+    let mut perimeter = 0.0f64;
+    for (&(a, b), _) in count.iter().filter(|(_, c)| **c == 1) {
+        let (pa, pb) = (v[a as usize], v[b as usize]);
+        assert!(on_side(pa) && on_side(pb), "{pa:?} {pb:?}");
+        perimeter += (0..3)
+            .map(|i| f64::from(pa[i] - pb[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+    }
+    assert!((perimeter - 4.0).abs() < 1e-4, "{perimeter}");
+}
+
+/// The smallest cosine between a face normal and the radial direction through its centroid.
+fn min_radial_cosine(mesh: &TriMesh) -> f64 {
+    mesh.triangles()
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices()[i as usize].map(f64::from));
+            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let n = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
+            let m = [0, 1, 2].map(|i| a[i] + b[i] + c[i]);
+            let dot = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+            let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            dot / (len(n) * len(m))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn noisy_sphere_never_flips_and_stays_watertight() {
+    // Radial noise of 1% (15% of an edge): every face must still point outwards. At 5%
+    // (75% of an edge) the radial direction is no reference any more (faces of the input are
+    // already tilted by up to 73°), so only manifoldness and orientation are checked there.
+    for (amp, ratios) in [(0.01, [0.2, 0.05, 0.01]), (0.05, [0.5, 0.2, 0.05])] {
+        let mesh = noisy_sphere(4, amp);
+        for ratio in ratios {
+            let out = decimate(&mesh, &options(Target::Ratio(ratio))).unwrap();
+            let target = (ratio * mesh.face_count() as f64).round();
+            assert!((out.mesh.face_count() as f64 - target).abs() <= 0.01 * target + 1.0);
+            if amp <= 0.01 {
+                let cos = min_radial_cosine(&out.mesh);
+                assert!(cos > 0.0, "ratio {ratio}: a face points inwards ({cos})");
+            }
+            assert_closed_manifold(&out.mesh);
+            assert_eq!(out.vertex_map.len(), mesh.vertex_count());
+            assert!(
+                out.vertex_map
+                    .iter()
+                    .all(|&m| (m as usize) < out.mesh.vertex_count())
+            );
+        }
+    }
+}
+
+#[test]
+fn face_count_within_one_percent_of_target() {
+    let mesh = noisy_sphere(5, 0.01);
+    let out = decimate(&mesh, &options(Target::Faces(2000))).unwrap();
+    assert!(out.mesh.face_count().abs_diff(2000) <= 20);
+    assert!(out.mesh.face_count() <= 2000);
+    assert_eq!(out.input_faces, 20480);
+}
+
+#[test]
+fn same_output_for_one_and_two_threads() {
+    let mesh = noisy_sphere(4, 0.05);
+    let run = |threads: usize| -> Decimation {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| decimate(&mesh, &options(Target::Ratio(0.1))).unwrap())
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn triangle_soup_is_welded() {
+    let sphere = icosphere(2);
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for f in 0..sphere.face_count() {
+        let base = vertices.len() as u32;
+        vertices.extend(sphere.triangle_positions(f));
+        triangles.push([base, base + 1, base + 2]);
+    }
+    let soup = TriMesh::new(vertices, triangles).unwrap();
+    let out = decimate(&soup, &options(Target::Ratio(0.5))).unwrap();
+    assert!(out.welded);
+    assert_eq!(out.mesh.face_count(), 160);
+    assert_closed_manifold(&out.mesh);
+    assert_eq!(out.vertex_map.len(), 3 * 320);
+    // Copies of one position land on one output vertex.
+    let twin = (1..soup.vertex_count())
+        .find(|&i| soup.vertices()[i] == soup.vertices()[0])
+        .unwrap();
+    assert_eq!(out.vertex_map[0], out.vertex_map[twin]);
+
+    let plain = decimate(&sphere, &options(Target::Ratio(0.5))).unwrap();
+    assert!(!plain.welded);
+}
+
+#[test]
+fn attributes_are_carried_through_collapses() {
+    let grid = grid_plane(12, 12);
+    let uvs: Vec<[f32; 2]> = grid.vertices().iter().map(|p| [p[0], p[1]]).collect();
+    let colors: Vec<[f32; 3]> = grid.vertices().iter().map(|p| [p[0], p[1], 0.5]).collect();
+    let normals = vec![[0.0, 0.0, 1.0]; grid.vertex_count()];
+    let mesh = grid
+        .with_uvs(uvs)
+        .unwrap()
+        .with_colors(colors)
+        .unwrap()
+        .with_normals(normals)
+        .unwrap();
+    let out = decimate(&mesh, &options(Target::Ratio(0.1))).unwrap();
+    assert!(out.mesh.face_count() < 40);
+    let (v, uv, col, nor) = (
+        out.mesh.vertices(),
+        out.mesh.uvs().unwrap(),
+        out.mesh.colors().unwrap(),
+        out.mesh.normals().unwrap(),
+    );
+    for i in 0..v.len() {
+        // The attributes are linear in position, so interpolation reproduces them.
+        assert!((uv[i][0] - v[i][0]).abs() < 1e-5 && (uv[i][1] - v[i][1]).abs() < 1e-5);
+        assert!((col[i][0] - v[i][0]).abs() < 1e-5 && (col[i][2] - 0.5).abs() < 1e-6);
+        assert!((nor[i][2] - 1.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn uv_seam_vertices_stay_in_place() {
+    // A grid split along x = 0.5 into two UV islands sharing positions.
+    let grid = grid_plane(8, 8);
+    let mut vertices = grid.vertices().to_vec();
+    let mut uvs: Vec<[f32; 2]> = vertices.iter().map(|p| [p[0], p[1]]).collect();
+    let mut copy = HashMap::new();
+    let triangles = grid
+        .triangles()
+        .iter()
+        .map(|t| {
+            let right = t
+                .iter()
+                .any(|&v| grid.vertices()[v as usize][0] > 0.5 + 1e-6);
+            t.map(|v| {
+                let p = grid.vertices()[v as usize];
+                if right && (p[0] - 0.5).abs() < 1e-6 {
+                    *copy.entry(v).or_insert_with(|| {
+                        vertices.push(p);
+                        uvs.push([p[0] + 0.25, p[1]]);
+                        vertices.len() as u32 - 1
+                    })
+                } else {
+                    v
+                }
+            })
+        })
+        .collect();
+    let mesh = TriMesh::new(vertices.clone(), triangles)
+        .unwrap()
+        .with_uvs(uvs)
+        .unwrap();
+    let out = decimate(&mesh, &options(Target::Ratio(0.2))).unwrap();
+    let seam: Vec<[f32; 3]> = vertices
+        .iter()
+        .copied()
+        .filter(|p| (p[0] - 0.5).abs() < 1e-6)
+        .collect();
+    for p in &seam {
+        let copies = out.mesh.vertices().iter().filter(|q| *q == p).count();
+        assert_eq!(copies, 2, "seam vertex {p:?} lost or merged");
+    }
+}
+
+#[test]
+fn keep_original_positions_places_vertices_on_inputs() {
+    let mesh = noisy_sphere(3, 0.05);
+    let out = decimate(
+        &mesh,
+        &DecimationOptions {
+            target: Target::Ratio(0.25),
+            keep_original_positions: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for (j, p) in out.mesh.vertices().iter().enumerate() {
+        let source = mesh.vertices().iter().position(|q| q == p).unwrap();
+        assert_eq!(out.vertex_map[source] as usize, j);
+    }
+    assert_closed_manifold(&out.mesh);
+}
+
+#[test]
+fn max_error_stops_early_and_bounds_the_error() {
+    let mesh = noisy_sphere(4, 0.05);
+    let out = decimate(
+        &mesh,
+        &DecimationOptions {
+            target: Target::Faces(10),
+            max_error: Some(0.01),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(out.stop_reason, StopReason::MaxError);
+    assert!(out.error_distance <= 0.01);
+    assert!(out.mesh.face_count() > 10 && out.mesh.face_count() < mesh.face_count());
+}
+
+#[test]
+fn rejects_bad_ratio_and_empty_mesh() {
+    let mesh = icosphere(1);
+    for r in [0.0, -0.5, 1.5, f64::NAN] {
+        assert!(matches!(
+            decimate(&mesh, &options(Target::Ratio(r))),
+            Err(Error::InvalidParameter { name: "ratio", .. })
+        ));
+    }
+    let empty = TriMesh::new(vec![[0.0; 3]], vec![]).unwrap();
+    assert!(matches!(
+        decimate(&empty, &DecimationOptions::default()),
+        Err(Error::Empty { .. })
+    ));
+    let out = decimate(&mesh, &options(Target::Ratio(1.0))).unwrap();
+    assert_eq!(out.mesh.face_count(), mesh.face_count());
+}

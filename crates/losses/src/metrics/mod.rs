@@ -1,0 +1,33 @@
+//! Evaluation metrics as plain Rust (f64 accumulation, rayon, kiddo nearest neighbours).
+
+mod chamfer;
+mod curvature_error;
+mod hausdorff;
+mod laplacian_error;
+mod mesh_evaluation;
+mod morphable_model;
+mod nearest_value_error;
+mod normal_consistency;
+mod normals_error;
+mod per_vertex_error;
+mod point_cloud_evaluation;
+mod roughness_error;
+mod structural_distortion;
+mod watertightness;
+
+pub use chamfer::{ChamferDistance, chamfer_distance};
+pub use curvature_error::curvature_error;
+pub use hausdorff::hausdorff_distance;
+pub use laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};
+pub use mesh_evaluation::{MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation};
+pub use morphable_model::{Compactness, ErrorSummary, compactness, generalisation, specificity};
+pub use nearest_value_error::nearest_value_error;
+pub use normal_consistency::{NormalOrientation, normal_consistency};
+pub use normals_error::normals_error;
+pub use per_vertex_error::per_vertex_error;
+pub use point_cloud_evaluation::{
+    EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation, point_cloud_evaluation,
+};
+pub use roughness_error::roughness_error;
+pub use structural_distortion::{SdmParams, structural_distortion};
+pub use watertightness::watertightness;
