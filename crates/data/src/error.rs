@@ -13,12 +13,12 @@ pub enum Error {
     Geometry(#[from] meshgnn_geometry::Error),
 
     /// The operating system refused to read or write a file.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file or directory.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying I/O error (shown in the message, so not repeated as a `source()`).
+        error: std::io::Error,
     },
 
     /// A generator parameter is outside its documented range.

@@ -137,7 +137,7 @@ impl FolderDataset {
         let path = root.join(MANIFEST_FILE);
         let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
             path: path.clone(),
-            source,
+            error: source,
         })?;
         let manifest: Manifest = serde_json::from_str(&text)
             .map_err(|e| manifest_error(&path, format!("invalid manifest: {e}")))?;
@@ -264,7 +264,7 @@ pub fn write_dataset(
     let root = root.as_ref();
     std::fs::create_dir_all(root).map_err(|source| Error::Io {
         path: root.to_path_buf(),
-        source,
+        error: source,
     })?;
     let listed: std::collections::BTreeSet<&String> = manifest.splits.values().flatten().collect();
     for (name, mesh) in meshes {

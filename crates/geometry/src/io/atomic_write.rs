@@ -16,7 +16,7 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<()> {
     let io_error = |source| Error::Io {
         path: path.to_path_buf(),
-        source,
+        error: source,
     };
     let name = path.file_name().ok_or_else(|| {
         io_error(std::io::Error::new(

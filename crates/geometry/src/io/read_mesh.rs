@@ -30,7 +30,7 @@ pub(crate) fn parse_bytes(
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
-        source,
+        error: source,
     })
 }
 
