@@ -15,7 +15,7 @@ fn main() -> Result<(), meshgnn_geometry::Error> {
         .map_or_else(|| PathBuf::from("bench-data"), PathBuf::from);
     std::fs::create_dir_all(&folder).map_err(|source| meshgnn_geometry::Error::Io {
         path: folder.clone(),
-        source,
+        error: source,
     })?;
     let sphere = icosphere(8);
     let mut rng = rand::rngs::StdRng::seed_from_u64(7);
