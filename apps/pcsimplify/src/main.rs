@@ -1,4 +1,5 @@
-//! `pcsimplify`: simplify and evaluate point clouds (thesis chapter 5).
+//! `pcsimplify`: simplify and evaluate point clouds (thesis chapter 5): `simplify`, `bench`,
+//! `eval`. See docs/pcsimplify.md.
 //!
 //! Thin by design: argument parsing and output live here, every computation lives in the
 //! meshgnn crates. Each subcommand is one module with an `Args` struct and `run`.
@@ -7,7 +8,13 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod bench;
 mod eval;
+mod input;
+mod method;
+mod qem_vertices;
+mod simplify;
+mod train;
 
 /// Simplify and evaluate point clouds (PLY, OBJ, XYZ; meshes are read as their vertices).
 #[derive(Parser, Debug)]
@@ -19,6 +26,12 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Keep exactly round(ratio × N) points of a cloud or mesh (neural or a classical method).
+    Simplify(simplify::SimplifyArgs),
+    /// Every method × ratio on a folder, Table 5.1 layout (CD, NC, CE, RE, SDM).
+    Bench(bench::BenchArgs),
+    /// Train the learned simplifier on a `synth shapes` folder (thesis ch. 5.6).
+    Train(train::TrainArgs),
     /// CD, NC, CE, RE and SDM of a simplified cloud against its original (thesis ch. 5.4).
     Eval(eval::EvalArgs),
 }
@@ -26,6 +39,9 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Simplify(args) => simplify::run(args),
+        Command::Bench(args) => bench::run(args),
+        Command::Train(args) => train::run(args),
         Command::Eval(args) => eval::run(args),
     };
     match result {

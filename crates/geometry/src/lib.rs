@@ -39,6 +39,7 @@ mod normalization;
 mod pca_normals;
 mod surface_sampling;
 mod symmetric_eigen3;
+mod tangent_chart_triangulation;
 mod vertex_normals;
 mod watertight;
 
@@ -73,5 +74,8 @@ pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage}
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
 pub use surface_sampling::{SurfaceSamples, sample_surface};
+pub use tangent_chart_triangulation::{
+    Reconstruction, TangentChartOptions, tangent_chart_triangulation,
+};
 pub use vertex_normals::vertex_normals;
 pub use watertight::is_watertight;

@@ -11,7 +11,11 @@ mod closest_point_on_triangle;
 mod error;
 mod mesh_hierarchy;
 mod pooling_matrices;
+mod qem_candidates;
+mod qem_collapse_checks;
+mod qem_collapser;
 mod qem_decimation;
+mod qem_edge_placement;
 mod quadric;
 mod weld_by_position;
 
@@ -25,6 +29,7 @@ mod knn_graph;
 mod mesh_adjacency;
 mod radius_graph;
 mod spiral;
+mod top_curvature_sampling;
 mod triangle_knn_graph;
 mod weighted_sampling;
 
@@ -49,5 +54,6 @@ pub use knn_graph::{Neighbours, knn_graph, knn_query};
 pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};
 pub use radius_graph::{RadiusNeighbours, radius_graph};
 pub use spiral::{Spirals, spiral_sequences};
+pub use top_curvature_sampling::top_curvature_sampling;
 pub use triangle_knn_graph::{triangle_barycentres, triangle_knn_graph};
 pub use weighted_sampling::{uniform_sampling, weighted_sampling};

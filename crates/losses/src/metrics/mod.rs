@@ -20,7 +20,10 @@ pub use curvature_error::curvature_error;
 pub use hausdorff::hausdorff_distance;
 pub use laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};
 pub use mesh_evaluation::{MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation};
-pub use morphable_model::{Compactness, ErrorSummary, compactness, generalisation, specificity};
+pub use morphable_model::{
+    CentredShapes, Compactness, ErrorSummary, centred_shapes, compactness, generalisation,
+    specificity,
+};
 pub use nearest_value_error::nearest_value_error;
 pub use normal_consistency::{NormalOrientation, normal_consistency};
 pub use normals_error::normals_error;

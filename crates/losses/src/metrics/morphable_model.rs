@@ -48,30 +48,40 @@ fn check_shapes(what: &'static str, shapes: &[Vec<[f32; 3]>]) -> Result<usize> {
     Ok(first.len())
 }
 
-/// Compactness: the PCA variances of `shapes` (`S` registered shapes, each `#V×3`) and the
-/// cumulative fraction of variance they explain. Computed from the `S×S` Gram matrix of the
-/// centred shapes in `f64` (exact PCA spectrum, O(S²·V)); at most `S − 1` components.
+/// Registered shapes centred on their mean, with their `S×S` Gram matrix: the common start of
+/// PCA (eq. 3.2) and compactness, which take the spectrum from the Gram matrix instead of the
+/// `3V×3V` covariance.
+#[derive(Clone, Debug)]
+pub struct CentredShapes {
+    /// Mean shape, `3V` (x, y, z per vertex).
+    pub mean: Vec<f64>,
+    /// Each shape minus the mean, `S × 3V`.
+    pub centred: Vec<Vec<f64>>,
+    /// `X Xᵀ / (S − 1)` of the centred shapes `X`, `S×S`; its eigenvalues are the PCA variances.
+    pub gram: Mat<f64>,
+}
+
+/// Centres `S ≥ 2` registered shapes (each `#V×3`) in `f64` and forms their Gram matrix
+/// (O(S²·V), rows in parallel, a fixed summation order so any thread count gives the same bits).
 ///
 /// ```
-/// use meshgnn_losses::metrics::compactness;
-/// // three shapes that differ only along x: one component explains everything
-/// let shapes = vec![vec![[0.0, 0.0, 0.0]], vec![[1.0, 0.0, 0.0]], vec![[2.0, 0.0, 0.0]]];
-/// let c = compactness(&shapes)?;
-/// assert!((c.variances[0] - 1.0).abs() < 1e-12); // variance of {0, 1, 2}
-/// assert!((c.cumulative[0] - 1.0).abs() < 1e-12);
+/// use meshgnn_losses::metrics::centred_shapes;
+/// let shapes = vec![vec![[0.0, 0.0, 0.0]], vec![[2.0, 0.0, 0.0]]];
+/// let c = centred_shapes(&shapes)?;
+/// assert_eq!(c.mean, vec![1.0, 0.0, 0.0]);
+/// assert_eq!(c.gram[(0, 1)], -1.0); // (-1)·(+1) / (2 − 1)
 /// # Ok::<(), meshgnn_losses::Error>(())
 /// ```
-pub fn compactness(shapes: &[Vec<[f32; 3]>]) -> Result<Compactness> {
+pub fn centred_shapes(shapes: &[Vec<[f32; 3]>]) -> Result<CentredShapes> {
     let v = check_shapes("training shapes", shapes)?;
     let s = shapes.len();
     if s < 2 {
         return Err(Error::InvalidParameter {
             name: "shapes",
-            message: "compactness needs at least two shapes".into(),
+            message: format!("needs at least two shapes, got {s}"),
         });
     }
-    let dim = 3 * v;
-    let mean: Vec<f64> = (0..dim)
+    let mean: Vec<f64> = (0..3 * v)
         .into_par_iter()
         .map(|d| {
             shapes
@@ -91,21 +101,50 @@ pub fn compactness(shapes: &[Vec<[f32; 3]>]) -> Result<Compactness> {
                 .collect()
         })
         .collect();
-    let gram_entries: Vec<f64> = (0..s * s)
-        .into_par_iter()
-        .map(|ij| {
-            let (i, j) = (ij / s, ij % s);
-            match (centred.get(i), centred.get(j)) {
-                (Some(a), Some(b)) => {
-                    a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>() / (s - 1) as f64
-                }
-                _ => 0.0,
-            }
+    // Lower triangle, one row per task; the product is symmetric term by term.
+    let rows: Vec<Vec<f64>> = centred
+        .par_iter()
+        .enumerate()
+        .map(|(i, a)| {
+            centred
+                .iter()
+                .take(i + 1)
+                .map(|b| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
+                .collect()
         })
         .collect();
+    let denom = (s - 1) as f64;
     let gram = Mat::from_fn(s, s, |i, j| {
-        gram_entries.get(i * s + j).copied().unwrap_or(0.0)
+        let (r, c) = if j <= i { (i, j) } else { (j, i) };
+        rows.get(r)
+            .and_then(|row| row.get(c))
+            .copied()
+            .unwrap_or(0.0)
+            / denom
     });
+    Ok(CentredShapes {
+        mean,
+        centred,
+        gram,
+    })
+}
+
+/// Compactness: the PCA variances of `shapes` (`S` registered shapes, each `#V×3`) and the
+/// cumulative fraction of variance they explain. Computed from the `S×S` Gram matrix of the
+/// centred shapes in `f64` (exact PCA spectrum, O(S²·V)); at most `S − 1` components.
+///
+/// ```
+/// use meshgnn_losses::metrics::compactness;
+/// // three shapes that differ only along x: one component explains everything
+/// let shapes = vec![vec![[0.0, 0.0, 0.0]], vec![[1.0, 0.0, 0.0]], vec![[2.0, 0.0, 0.0]]];
+/// let c = compactness(&shapes)?;
+/// assert!((c.variances[0] - 1.0).abs() < 1e-12); // variance of {0, 1, 2}
+/// assert!((c.cumulative[0] - 1.0).abs() < 1e-12);
+/// # Ok::<(), meshgnn_losses::Error>(())
+/// ```
+pub fn compactness(shapes: &[Vec<[f32; 3]>]) -> Result<Compactness> {
+    let s = shapes.len();
+    let gram = centred_shapes(shapes)?.gram;
     let mut variances =
         gram.self_adjoint_eigenvalues(Side::Lower)
             .map_err(|e| Error::InvalidParameter {

@@ -1,0 +1,395 @@
+//! `pcsimplify bench DIR [--ratios 0.2,0.1,0.05] [--methods fps,random,tcp] [--noise SIGMA]
+//! [--seed S] [--k 16] [--serial] [--json]`: every method at every ratio on every cloud or mesh
+//! of a folder, evaluated with the thesis' metrics (ch. 5.4) and printed in the layout of
+//! Table 5.1 (means over files). With `--noise`, each input gets seeded Gaussian noise of
+//! `σ × bounding-sphere radius` before simplification and is evaluated against its clean
+//! original (ch. 5.5.7).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use meshgnn_geometry::{MeshFormat, atomic_write, unit_sphere_normalization};
+use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
+use rand::{SeedableRng, rngs::StdRng};
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use serde_json::{Value, json};
+
+use crate::input::{Input, read_input};
+use crate::method::{Method, load_model, select, target_count};
+use meshgnn_models::point_simplifier::PointSimplifier;
+
+/// Arguments of `pcsimplify bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Folder of clouds and meshes (.ply .obj .off .gltf .glb .xyz; not recursive).
+    pub dir: PathBuf,
+    /// Simplification ratios N_s / N (comma separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.2, 0.1, 0.05])]
+    pub ratios: Vec<f64>,
+    /// Methods to compare (comma separated); `qem` is skipped on files without faces.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Method::BENCH_DEFAULT)]
+    pub methods: Vec<Method>,
+    /// Gaussian noise σ added to the inputs, as a fraction of the bounding-sphere radius.
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Weights of the neural simplifier (default: the bundled ones).
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Seed of every random choice (noise of file i uses seed + i).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Neighbours for the curvature features of the metrics (eq. 5.1-5.3).
+    #[arg(long, default_value_t = EVALUATION_CURVATURE_NEIGHBOURS)]
+    pub k: usize,
+    /// One file at a time (each method still uses every core): cleaner timings.
+    #[arg(long)]
+    pub serial: bool,
+    /// Print one JSON object instead of Markdown.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON object to this file (atomically), whatever is printed.
+    #[arg(long)]
+    pub json_out: Option<PathBuf>,
+}
+
+/// The metrics of one method at one ratio on one file.
+#[derive(Debug, Clone)]
+struct Row {
+    file: String,
+    method: Method,
+    ratio: f64,
+    points: usize,
+    kept: usize,
+    /// `[cd, nc, ce, re, sdm]`.
+    metrics: [f64; 5],
+    seconds: f64,
+}
+
+/// Metric names, the factor each is printed multiplied by, and its unit.
+const COLUMNS: [(&str, f64, &str); 5] = [
+    ("CD", 1e4, "×10⁻⁴, squared unit-sphere units"),
+    ("NC", 1.0, "in [0, 2]"),
+    ("CE", 1e2, "×10⁻², dimensionless"),
+    ("RE", 1e2, "×10⁻², dimensionless"),
+    ("SDM", 1e2, "×10⁻², in [0, 1]"),
+];
+
+/// Lists the folder, runs every file, prints the table.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    for &r in &args.ratios {
+        if !(r.is_finite() && r > 0.0 && r <= 1.0) {
+            bail!("--ratios: {r} is not in (0, 1]");
+        }
+    }
+    if !(args.noise.is_finite() && args.noise >= 0.0) {
+        bail!("--noise must be a finite σ >= 0, got {}", args.noise);
+    }
+    if args.methods.is_empty() {
+        bail!("--methods: give at least one method");
+    }
+    let files = list_inputs(&args.dir)?;
+    if files.is_empty() {
+        bail!(
+            "{} holds no cloud or mesh (.ply .obj .off .gltf .glb .xyz)",
+            args.dir.display()
+        );
+    }
+    let model = match args.methods.contains(&Method::Neural) {
+        true => Some(load_model(args.weights.as_deref())?),
+        false => None,
+    };
+    let job = |(i, path): (usize, &PathBuf)| bench_file(args, model.as_ref(), i, path);
+    let per_file: Vec<(Vec<Row>, Vec<Value>)> = if args.serial {
+        files.iter().enumerate().map(job).collect::<Result<_>>()?
+    } else {
+        files
+            .par_iter()
+            .enumerate()
+            .map(job)
+            .collect::<Result<_>>()?
+    };
+    let (rows, skipped): (Vec<Row>, Vec<Value>) = per_file.into_iter().fold(
+        (Vec::new(), Vec::new()),
+        |(mut rows, mut skipped), (r, s)| {
+            rows.extend(r);
+            skipped.extend(s);
+            (rows, skipped)
+        },
+    );
+    let names: Vec<String> = files.iter().map(|p| file_name(p)).collect();
+    let report = to_json(args, &names, &rows, &skipped);
+    if let Some(path) = &args.json_out {
+        let text = serde_json::to_string_pretty(&report)?;
+        atomic_write(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{report}");
+    } else {
+        print!("{}", to_markdown(args, &names, &rows, &skipped));
+    }
+    Ok(())
+}
+
+/// Supported files directly in `dir`, sorted by name.
+fn list_inputs(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry
+            .with_context(|| format!("listing {}", dir.display()))?
+            .path();
+        if path.is_file() && MeshFormat::from_path(&path).is_ok() {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// Seeded Gaussian noise of standard deviation `sigma × radius` (bounding sphere about the
+/// centroid) on every coordinate of `points: #P×3`.
+fn add_noise(points: &[[f32; 3]], sigma: f64, seed: u64) -> Result<Vec<[f32; 3]>> {
+    let radius = unit_sphere_normalization(points)?.radius;
+    let normal = Normal::new(0.0, sigma * radius).context("noise σ")?;
+    let mut rng = StdRng::seed_from_u64(seed);
+    Ok(points
+        .iter()
+        .map(|p| p.map(|x| (f64::from(x) + normal.sample(&mut rng)) as f32))
+        .collect())
+}
+
+/// Every method at every ratio on file `index`.
+fn bench_file(
+    args: &BenchArgs,
+    model: Option<&PointSimplifier>,
+    index: usize,
+    path: &Path,
+) -> Result<(Vec<Row>, Vec<Value>)> {
+    let name = file_name(path);
+    let clean = read_input(path)?;
+    let input: Input = if args.noise > 0.0 {
+        let noisy = add_noise(
+            &clean.points,
+            args.noise,
+            args.seed.wrapping_add(index as u64),
+        )?;
+        clean.with_points(noisy)?
+    } else {
+        clean.clone()
+    };
+    let n = input.points.len();
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    for &ratio in &args.ratios {
+        let count = target_count(n, Some(ratio), None).with_context(|| name.clone())?;
+        if count < 3 {
+            bail!("{name}: ratio {ratio} keeps {count} points; the metrics need at least 3");
+        }
+        for &method in &args.methods {
+            if method == Method::Qem && input.mesh.is_none() {
+                skipped
+                    .push(json!({ "file": name, "method": method.name(), "reason": "no faces" }));
+                continue;
+            }
+            let selection = select(method, &input, count, args.seed, model)
+                .with_context(|| format!("{name}: {} at ratio {ratio}", method.name()))?;
+            let kept = selection.kept_points(&input);
+            let e = point_cloud_evaluation(&clean.points, &kept, args.k).with_context(|| {
+                format!("{name}: evaluating {} at ratio {ratio}", method.name())
+            })?;
+            rows.push(Row {
+                file: name.clone(),
+                method,
+                ratio,
+                points: n,
+                kept: kept.len(),
+                metrics: [e.cd, e.nc, e.ce, e.re, e.sdm],
+                seconds: selection.seconds(),
+            });
+        }
+    }
+    Ok((rows, skipped))
+}
+
+/// Means over files of `(method, ratio)`: `(files, [metrics], seconds)`.
+fn means(rows: &[Row], method: Method, ratio: f64) -> Option<(usize, [f64; 5], f64)> {
+    let cell: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.method == method && r.ratio == ratio)
+        .collect();
+    if cell.is_empty() {
+        return None;
+    }
+    let count = cell.len() as f64;
+    let mut metrics = [0.0; 5];
+    for r in &cell {
+        for (m, v) in metrics.iter_mut().zip(r.metrics) {
+            *m += v / count;
+        }
+    }
+    let seconds = cell.iter().map(|r| r.seconds).sum::<f64>() / count;
+    Some((cell.len(), metrics, seconds))
+}
+
+fn to_json(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Value]) -> Value {
+    let mut results = Vec::new();
+    for &ratio in &args.ratios {
+        for &method in &args.methods {
+            if let Some((files, m, seconds)) = means(rows, method, ratio) {
+                results.push(json!({
+                    "method": method.name(), "ratio": ratio, "files": files,
+                    "cd": m[0], "nc": m[1], "ce": m[2], "re": m[3], "sdm": m[4],
+                    "seconds": seconds,
+                }));
+            }
+        }
+    }
+    let per_file: Vec<Value> = rows
+        .iter()
+        .map(|r| {
+            json!({
+                "file": r.file, "method": r.method.name(), "ratio": r.ratio,
+                "points": r.points, "kept": r.kept,
+                "cd": r.metrics[0], "nc": r.metrics[1], "ce": r.metrics[2],
+                "re": r.metrics[3], "sdm": r.metrics[4], "seconds": r.seconds,
+            })
+        })
+        .collect();
+    json!({
+        "dir": args.dir.display().to_string(),
+        "files": names,
+        "noise": args.noise,
+        "seed": args.seed,
+        "k": args.k,
+        "units": {
+            "cd": "squared unit-sphere units (both clouds scaled by the original's centroid and bounding-sphere radius)",
+            "nc": "1 - |cos| of PCA normals, in [0, 2]",
+            "ce": "dimensionless", "re": "dimensionless", "sdm": "in [0, 1]",
+            "seconds": "selection time per file, mean",
+            "noise": "σ as a fraction of the bounding-sphere radius",
+        },
+        "results": results,
+        "per_file": per_file,
+        "skipped": skipped,
+    })
+}
+
+fn to_markdown(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Value]) -> String {
+    let mut out = format!(
+        "Simplification of {} files in {} (noise σ = {} × bounding-sphere radius, seed {}, k = {}); \
+         means over files, lower is better, best per column in bold.\n\
+         Units: {}.\n\n",
+        names.len(),
+        args.dir.display(),
+        args.noise,
+        args.seed,
+        args.k,
+        COLUMNS
+            .iter()
+            .map(|(name, _, unit)| format!("{name} {unit}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    // Header: one group of five columns per ratio (Table 5.1 layout).
+    out.push_str("| method |");
+    for ratio in &args.ratios {
+        for (name, _, _) in COLUMNS {
+            out.push_str(&format!(" {name} @{ratio} |"));
+        }
+    }
+    out.push_str("\n|---|");
+    for _ in &args.ratios {
+        out.push_str("---:|---:|---:|---:|---:|");
+    }
+    out.push('\n');
+    let cells: Vec<Vec<Option<[f64; 5]>>> = args
+        .methods
+        .iter()
+        .map(|&m| {
+            args.ratios
+                .iter()
+                .map(|&r| means(rows, m, r).map(|c| c.1))
+                .collect()
+        })
+        .collect();
+    for (mi, method) in args.methods.iter().enumerate() {
+        out.push_str(&format!("| {} |", method.name()));
+        for ri in 0..args.ratios.len() {
+            for (c, (_, factor, _)) in COLUMNS.iter().enumerate() {
+                let Some(value) = cells[mi][ri].map(|m| m[c]) else {
+                    out.push_str(" n/a |");
+                    continue;
+                };
+                let best = cells
+                    .iter()
+                    .filter_map(|row| row[ri].map(|m| m[c]))
+                    .fold(f64::INFINITY, f64::min);
+                let text = format!("{:.3}", value * factor);
+                if value == best && args.methods.len() > 1 {
+                    out.push_str(&format!(" **{text}** |"));
+                } else {
+                    out.push_str(&format!(" {text} |"));
+                }
+            }
+        }
+        out.push('\n');
+    }
+    out.push_str("\nSelection time per file (seconds, mean):\n\n| method |");
+    for ratio in &args.ratios {
+        out.push_str(&format!(" @{ratio} |"));
+    }
+    out.push_str("\n|---|");
+    for _ in &args.ratios {
+        out.push_str("---:|");
+    }
+    out.push('\n');
+    for &method in &args.methods {
+        out.push_str(&format!("| {} |", method.name()));
+        for &ratio in &args.ratios {
+            match means(rows, method, ratio) {
+                Some((_, _, s)) => out.push_str(&format!(" {s:.4} |")),
+                None => out.push_str(" n/a |"),
+            }
+        }
+        out.push('\n');
+    }
+    if !skipped.is_empty() {
+        out.push_str(&format!(
+            "\nSkipped (qem needs faces): {} file × method pairs.\n",
+            skipped.len()
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use meshgnn_geometry::icosphere;
+
+    #[test]
+    fn noise_has_the_requested_sigma_and_is_seeded() {
+        let sphere = icosphere(5); // 10242 points, bounding-sphere radius 1
+        let points = sphere.vertices();
+        let noisy = add_noise(points, 0.01, 3).unwrap();
+        let n = (points.len() * 3) as f64;
+        let var: f64 = points
+            .iter()
+            .zip(&noisy)
+            .flat_map(|(p, q)| (0..3).map(move |d| f64::from(q[d] - p[d]).powi(2)))
+            .sum::<f64>()
+            / n;
+        assert!((var.sqrt() - 0.01).abs() < 0.0005, "σ = {}", var.sqrt());
+        assert_eq!(noisy, add_noise(points, 0.01, 3).unwrap());
+        assert_ne!(noisy, add_noise(points, 0.01, 4).unwrap());
+    }
+}

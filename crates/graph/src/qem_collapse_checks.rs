@@ -1,0 +1,155 @@
+//! Whether one QEM edge collapse keeps the mesh valid: the link condition (Dey et al., "Topology
+//! preserving edge contraction", 1999) so a 2-manifold stays one, and the geometric checks of
+//! Garland & Heckbert (SIGGRAPH 1997, §3: "mesh inversion") against flipped, folded and
+//! degenerate faces. Thesis ch. 2.3.2.
+
+use std::cmp::Ordering;
+
+use crate::qem_collapser::{Collapser, DEAD, cross, dot, sub};
+
+/// Normals of faces may turn by at most `acos(0.2)` ≈ 78° in one collapse.
+pub(crate) const MIN_NORMAL_COS: f64 = 0.2;
+/// A moved face must stay within `acos(0.2)` ≈ 78° of the input surface its corners stand for
+/// (the sum of their region normals).
+pub(crate) const MIN_REGION_COS: f64 = 0.2;
+/// A face whose doubled area is below this fraction of its longest squared edge is degenerate.
+const MIN_SLIVER: f64 = 1e-7;
+
+/// The two vertices of `face` other than `v`, in winding order after `v`.
+fn others(face: [u32; 3], v: u32) -> [u32; 2] {
+    if face[0] == v {
+        [face[1], face[2]]
+    } else if face[1] == v {
+        [face[2], face[0]]
+    } else {
+        [face[0], face[1]]
+    }
+}
+
+/// Number of values of `x` also in `y` (both free of duplicates, small).
+fn common_count(x: &[u32], y: &[u32]) -> usize {
+    x.iter().filter(|v| y.contains(v)).count()
+}
+
+impl Collapser {
+    /// Collects the live faces around `v` into `fan` and its neighbours other than `skip`
+    /// (each once) into `ring`.
+    fn gather(&self, v: u32, skip: u32, fan: &mut Vec<[u32; 3]>, ring: &mut Vec<u32>) {
+        fan.clear();
+        ring.clear();
+        for k in self.incident(v) {
+            let face = self.faces[self.refs[k] as usize];
+            if face[0] == DEAD {
+                continue;
+            }
+            fan.push(face);
+            for x in face {
+                // Rings are small (~6): a linear scan beats sorting.
+                if x != v && x != skip && !ring.contains(&x) {
+                    ring.push(x);
+                }
+            }
+        }
+    }
+
+    /// Link condition, boundary, duplicate-face, flip, fold and degeneracy checks for
+    /// collapsing `(a, b)` to `p` (both fans move: the placement need not be an endpoint).
+    ///
+    /// Rejected when: the common neighbours of `a` and `b` are not exactly the apexes of their
+    /// shared faces (the link condition: a pinched vertex or edge would appear); an interior
+    /// edge joins two boundary vertices (it would pinch the boundary); the two fans hold
+    /// opposite edges `(x, y)` (duplicate faces); `a` and `b` are all their component has
+    /// left; or a moved face turns by more than `acos(MIN_NORMAL_COS)`, leaves the input
+    /// surface its corners stand for by more than `acos(MIN_REGION_COS)`, or degenerates.
+    pub(crate) fn collapse_allowed(&mut self, a: u32, b: u32, p: [f32; 3]) -> bool {
+        let mut fan_a = std::mem::take(&mut self.scratch_fan_a);
+        let mut fan_b = std::mem::take(&mut self.scratch_fan_b);
+        let mut ring_a = std::mem::take(&mut self.scratch_ring_a);
+        let mut ring_b = std::mem::take(&mut self.scratch_ring_b);
+        self.gather(a, b, &mut fan_a, &mut ring_a);
+        self.gather(b, a, &mut fan_b, &mut ring_b);
+        let ok = self.fans_allow(a, b, p, &fan_a, &fan_b, &ring_a, &ring_b);
+        self.scratch_fan_a = fan_a;
+        self.scratch_fan_b = fan_b;
+        self.scratch_ring_a = ring_a;
+        self.scratch_ring_b = ring_b;
+        ok
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn fans_allow(
+        &mut self,
+        a: u32,
+        b: u32,
+        p: [f32; 3],
+        fan_a: &[[u32; 3]],
+        fan_b: &[[u32; 3]],
+        ring_a: &[u32],
+        ring_b: &[u32],
+    ) -> bool {
+        let shared = fan_b.iter().filter(|f| f.contains(&a)).count();
+        if shared == 0 || shared > 2 || fan_a.len() + fan_b.len() == 2 * shared {
+            return false;
+        }
+        if common_count(ring_a, ring_b) != shared {
+            return false;
+        }
+        if shared == 2 && self.verts[a as usize].boundary() && self.verts[b as usize].boundary() {
+            return false;
+        }
+        // Duplicate faces: an opposite edge present around both a and b.
+        self.scratch_pairs.clear();
+        for &face in fan_a.iter().filter(|f| !f.contains(&b)) {
+            let [x, y] = others(face, a);
+            self.scratch_pairs.push([x.min(y), x.max(y)]);
+        }
+        for &face in fan_b.iter().filter(|f| !f.contains(&a)) {
+            let [x, y] = others(face, b);
+            if self.scratch_pairs.contains(&[x.min(y), x.max(y)]) {
+                return false;
+            }
+        }
+        // Flips, folds and degenerate faces around both ends.
+        let (ra, rb) = (
+            self.verts[a as usize].region_normal,
+            self.verts[b as usize].region_normal,
+        );
+        let merged_region: [f64; 3] = std::array::from_fn(|k| f64::from(ra[k] + rb[k]));
+        let p = p.map(f64::from);
+        for (moving, other, fan) in [(a, b, fan_a), (b, a, fan_b)] {
+            for &face in fan.iter().filter(|f| !f.contains(&other)) {
+                let [x, y] = others(face, moving);
+                let (vx, vy) = (self.verts[x as usize], self.verts[y as usize]);
+                let (px, py) = (vx.point(), vy.point());
+                let old = self.verts[moving as usize].point();
+                // The face is (moving, x, y) in winding order.
+                let n_old = cross(sub(px, old), sub(py, old));
+                let (ex, ey) = (sub(px, p), sub(py, p));
+                let n_new = cross(ex, ey);
+                let len_new2 = dot(n_new, n_new);
+                let exy = sub(py, px);
+                let longest2 = dot(ex, ex).max(dot(ey, ey)).max(dot(exy, exy));
+                // Also rejects NaN (written so that a NaN compares as degenerate).
+                if len_new2.sqrt().partial_cmp(&(MIN_SLIVER * longest2)) != Some(Ordering::Greater)
+                {
+                    return false;
+                }
+                let len_old2 = dot(n_old, n_old);
+                if len_old2 > 0.0
+                    && dot(n_old, n_new) < MIN_NORMAL_COS * (len_old2 * len_new2).sqrt()
+                {
+                    return false;
+                }
+                // Nor may it fold away from the input surface its corners represent.
+                let region: [f64; 3] = std::array::from_fn(|k| {
+                    merged_region[k] + f64::from(vx.region_normal[k] + vy.region_normal[k])
+                });
+                let len_region2 = dot(region, region);
+                if dot(region, n_new) < MIN_REGION_COS * (len_region2 * len_new2).sqrt() {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}

@@ -1,0 +1,502 @@
+//! The mutable state of QEM decimation (Garland & Heckbert, SIGGRAPH 1997; thesis ch. 2.3.2):
+//! compact vertex records, per-vertex quadrics, the faces and a flat vertex → face incidence
+//! list, and the edge collapse that updates them. The placement of a collapse lives in
+//! `qem_edge_placement.rs`, its validity checks in `qem_collapse_checks.rs`, the passes in
+//! `qem_decimation.rs`.
+//!
+//! # Layout
+//! Everything the collapse loop reads for a vertex (position, region normal, pass stamp,
+//! flags) sits in one 32-byte, 32-aligned [`VertexRecord`], so a vertex costs one cache-line
+//! fetch; quadrics (80 bytes, needed only to score an edge) are a separate array. Dead faces
+//! and vertices are marked in place ([`DEAD`]), not in side arrays.
+
+use meshgnn_geometry::TriMesh;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::qem_decimation::{Decimation, DecimationOptions, StopReason};
+use crate::quadric::Quadric;
+use crate::weld_by_position::weld_by_position;
+
+/// Marks a dead face (`faces[f] = [DEAD; 3]`) and a dead vertex (`stamp == DEAD`).
+pub(crate) const DEAD: u32 = u32::MAX;
+/// Vertex flag: never moved or removed (non-manifold edge or UV seam).
+pub(crate) const LOCKED: u32 = 1;
+/// Vertex flag: on the input's open boundary.
+pub(crate) const BOUNDARY: u32 = 2;
+/// The largest supported face count: incidence offsets are `u32` (`refs` stays below
+/// `4 · #F + 1024` plus one fan).
+const MAX_FACES: usize = 1_000_000_000;
+
+/// The hot per-vertex data of the collapse loop, one half cache line.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(32))]
+pub(crate) struct VertexRecord {
+    /// Current position (the output precision: checks run on exactly what is written).
+    pub position: [f32; 3],
+    /// Sum of the (doubled-)area normals of the input faces around the input vertices this
+    /// vertex represents: the orientation of the input surface it stands for.
+    pub region_normal: [f32; 3],
+    /// The pass in which this vertex last changed (0: never); [`DEAD`] once removed.
+    pub stamp: u32,
+    /// [`LOCKED`] | [`BOUNDARY`].
+    pub flags: u32,
+}
+
+impl VertexRecord {
+    pub(crate) fn alive(&self) -> bool {
+        self.stamp != DEAD
+    }
+
+    pub(crate) fn locked(&self) -> bool {
+        self.flags & LOCKED != 0
+    }
+
+    pub(crate) fn boundary(&self) -> bool {
+        self.flags & BOUNDARY != 0
+    }
+
+    pub(crate) fn point(&self) -> [f64; 3] {
+        self.position.map(f64::from)
+    }
+}
+
+/// Where an edge collapses to.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Placement {
+    pub cost: f64,
+    /// Rounded to `f32` before scoring, so the cost and the checks see the output position.
+    pub position: [f32; 3],
+    /// The endpoint that survives.
+    pub survivor: u32,
+    /// Parameter of `position` along `a → b`, for attribute interpolation.
+    pub t: f64,
+}
+
+#[inline]
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline]
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline]
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+fn lerp<const N: usize>(a: [f32; N], b: [f32; N], t: f64) -> [f32; N] {
+    std::array::from_fn(|i| (f64::from(a[i]) * (1.0 - t) + f64::from(b[i]) * t) as f32)
+}
+
+fn normalized(v: [f32; 3]) -> [f32; 3] {
+    let n = v
+        .iter()
+        .map(|x| f64::from(*x) * f64::from(*x))
+        .sum::<f64>()
+        .sqrt();
+    if n > 0.0 {
+        v.map(|x| (f64::from(x) / n) as f32)
+    } else {
+        v
+    }
+}
+
+/// Connectivity, quadrics and attributes of a mesh being decimated.
+pub(crate) struct Collapser {
+    pub verts: Vec<VertexRecord>,
+    pub quadrics: Vec<Quadric>,
+    /// `[DEAD; 3]` once removed.
+    pub faces: Vec<[u32; 3]>,
+    pub live_faces: usize,
+    /// Incident faces of vertex `v`: `refs[links[v].0 ..][.. links[v].1]` (may hold dead
+    /// faces, skipped on use).
+    pub refs: Vec<u32>,
+    pub links: Vec<(u32, u32)>,
+    parent: Vec<u32>,
+    normals: Option<Vec<[f32; 3]>>,
+    uvs: Option<Vec<[f32; 2]>>,
+    colors: Option<Vec<[f32; 3]>>,
+    weld_map: Vec<u32>,
+    welded: bool,
+    /// The setup's edges (manifold ones), scored in the first pass.
+    pub initial_edges: Vec<(u32, u32)>,
+    pub scratch_fan_a: Vec<[u32; 3]>,
+    pub scratch_fan_b: Vec<[u32; 3]>,
+    pub scratch_ring_a: Vec<u32>,
+    pub scratch_ring_b: Vec<u32>,
+    pub scratch_pairs: Vec<[u32; 2]>,
+    scratch_faces: Vec<u32>,
+    pub max_cost: f64,
+    pub max_error: f64,
+    pub collapses: usize,
+    pub keep_original_positions: bool,
+}
+
+impl Collapser {
+    /// Welds `mesh`, builds the incidence lists, quadrics (area-weighted face planes plus
+    /// boundary planes), region normals, flags and the list of collapsible edges.
+    pub(crate) fn new(mesh: &TriMesh, options: &DecimationOptions) -> Result<Self> {
+        if mesh.face_count() > MAX_FACES || mesh.vertex_count() >= DEAD as usize {
+            return Err(Error::UnusableMesh {
+                what: "mesh to decimate".into(),
+                message: format!(
+                    "{} triangles, {} vertices; decimation supports at most {MAX_FACES} \
+                     triangles and {DEAD} vertices: split it first",
+                    mesh.face_count(),
+                    mesh.vertex_count()
+                ),
+            });
+        }
+        let welding = weld_by_position(mesh.vertices(), mesh.uvs());
+        let reps = &welding.representatives;
+        let n = reps.len();
+        let positions: Vec<[f64; 3]> = reps
+            .par_iter()
+            .map(|&r| mesh.vertices()[r as usize].map(f64::from))
+            .collect();
+        let faces: Vec<[u32; 3]> = mesh
+            .triangles()
+            .par_iter()
+            .map(|t| t.map(|v| welding.map[v as usize]))
+            .filter(|[a, b, c]| a != b && b != c && a != c)
+            .collect();
+
+        // Attributes of welded vertices: UVs equal by construction; normals/colours averaged.
+        let average3 = |values: &[[f32; 3]], unit: bool| -> Vec<[f32; 3]> {
+            let mut sum = vec![[0f64; 3]; n];
+            let mut count = vec![0u32; n];
+            for (i, v) in values.iter().enumerate() {
+                let w = welding.map[i] as usize;
+                for k in 0..3 {
+                    sum[w][k] += f64::from(v[k]);
+                }
+                count[w] += 1;
+            }
+            sum.iter()
+                .zip(&count)
+                .map(|(s, &c)| {
+                    let m = s.map(|x| (x / f64::from(c.max(1))) as f32);
+                    if unit { normalized(m) } else { m }
+                })
+                .collect()
+        };
+        let normals = mesh.normals().map(|v| average3(v, true));
+        let colors = mesh.colors().map(|v| average3(v, false));
+        let uvs = mesh
+            .uvs()
+            .map(|u| reps.iter().map(|&r| u[r as usize]).collect::<Vec<_>>());
+
+        // Vertex → face incidence (CSR, faces in increasing order).
+        let mut links = vec![(0u32, 0u32); n];
+        for f in &faces {
+            for &v in f {
+                links[v as usize].1 += 1;
+            }
+        }
+        let mut total = 0u32;
+        for link in &mut links {
+            link.0 = total;
+            total += link.1;
+        }
+        let mut refs = vec![0u32; total as usize];
+        let mut fill: Vec<u32> = links.iter().map(|l| l.0).collect();
+        for (fi, f) in faces.iter().enumerate() {
+            for &v in f {
+                refs[fill[v as usize] as usize] = fi as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        drop(fill);
+
+        // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics and
+        // the sum of the face area normals. (Face planes are recomputed per incident vertex
+        // rather than stored: 3× the arithmetic, but no per-face array at the memory peak.)
+        let face_normal = |f: u32| {
+            let [p0, p1, p2] = faces[f as usize].map(|v| positions[v as usize]);
+            (cross(sub(p1, p0), sub(p2, p0)), p0)
+        };
+        let (mut quadrics, region): (Vec<Quadric>, Vec<[f64; 3]>) = (0..n)
+            .into_par_iter()
+            .map(|v| {
+                let (start, len) = links[v];
+                refs[start as usize..(start + len) as usize].iter().fold(
+                    (Quadric::default(), [0.0; 3]),
+                    |(q, s), &f| {
+                        let (normal, point) = face_normal(f);
+                        let plane =
+                            Quadric::from_plane(normal, point, 0.5 * dot(normal, normal).sqrt());
+                        (q + plane, std::array::from_fn(|k| s[k] + normal[k]))
+                    },
+                )
+            })
+            .unzip();
+
+        // Undirected edges `(a < b, face count, first face)`, enumerated per vertex from the
+        // incidence lists (parallel, no global sort): boundary and non-manifold detection.
+        let grouped: Vec<(u32, u32, u32, u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|a| {
+                let (start, len) = links[a];
+                let mut local: Vec<(u32, u32)> = Vec::with_capacity(2 * len as usize);
+                for &f in &refs[start as usize..(start + len) as usize] {
+                    for x in faces[f as usize] {
+                        if x as usize > a {
+                            local.push((x, f));
+                        }
+                    }
+                }
+                local.sort_unstable();
+                let mut out = Vec::with_capacity(local.len());
+                let mut i = 0;
+                while i < local.len() {
+                    let mut j = i + 1;
+                    while j < local.len() && local[j].0 == local[i].0 {
+                        j += 1;
+                    }
+                    out.push((a as u32, local[i].0, (j - i) as u32, local[i].1));
+                    i = j;
+                }
+                out
+            })
+            .collect();
+        let mut flags: Vec<u32> = welding
+            .seam
+            .iter()
+            .map(|&s| if s { LOCKED } else { 0 })
+            .collect();
+        let mut edges: Vec<(u32, u32)> = Vec::with_capacity(grouped.len());
+        for &(a, b, count, f) in &grouped {
+            match count {
+                1 => {
+                    flags[a as usize] |= BOUNDARY;
+                    flags[b as usize] |= BOUNDARY;
+                    let (normal, _) = face_normal(f);
+                    let (pa, pb) = (positions[a as usize], positions[b as usize]);
+                    let e = sub(pb, pa);
+                    let w = options.boundary_weight * dot(e, e);
+                    let q = Quadric::from_plane(cross(e, normal), pa, w);
+                    quadrics[a as usize] += q;
+                    quadrics[b as usize] += q;
+                    edges.push((a, b));
+                }
+                2 => edges.push((a, b)),
+                _ => {
+                    flags[a as usize] |= LOCKED;
+                    flags[b as usize] |= LOCKED;
+                }
+            }
+        }
+        drop(grouped);
+
+        let verts = (0..n)
+            .into_par_iter()
+            .map(|v| VertexRecord {
+                position: positions[v].map(|x| x as f32),
+                region_normal: region[v].map(|x| x as f32),
+                stamp: 0,
+                flags: flags[v],
+            })
+            .collect();
+        let live_faces = faces.len();
+        Ok(Self {
+            verts,
+            quadrics,
+            faces,
+            live_faces,
+            refs,
+            links,
+            parent: (0..n as u32).collect(),
+            normals,
+            uvs,
+            colors,
+            welded: welding.merged_any(),
+            weld_map: welding.map,
+            initial_edges: edges,
+            scratch_fan_a: Vec::new(),
+            scratch_fan_b: Vec::new(),
+            scratch_ring_a: Vec::new(),
+            scratch_ring_b: Vec::new(),
+            scratch_pairs: Vec::new(),
+            scratch_faces: Vec::new(),
+            max_cost: 0.0,
+            max_error: 0.0,
+            collapses: 0,
+            keep_original_positions: options.keep_original_positions,
+        })
+    }
+
+    /// The range of `refs` holding the incident faces of `v`.
+    pub(crate) fn incident(&self, v: u32) -> std::ops::Range<usize> {
+        let (start, len) = self.links[v as usize];
+        start as usize..(start + len) as usize
+    }
+
+    /// Collapses `(a, b)` at `placement` and updates the connectivity; stamps the survivor
+    /// with `pass`.
+    pub(crate) fn collapse(&mut self, a: u32, b: u32, placement: Placement, pass: u32) {
+        let s = placement.survivor;
+        let r = if s == a { b } else { a };
+        let (is, ir) = (s as usize, r as usize);
+        // Faces of r: remove those shared with s, re-point the others to s.
+        self.scratch_faces.clear();
+        for k in self.incident(r) {
+            let f = self.refs[k] as usize;
+            let face = &mut self.faces[f];
+            if face[0] == DEAD {
+                continue;
+            }
+            if face.contains(&s) {
+                *face = [DEAD; 3];
+                self.live_faces -= 1;
+            } else {
+                for v in face.iter_mut() {
+                    if *v == r {
+                        *v = s;
+                    }
+                }
+                self.scratch_faces.push(f as u32);
+            }
+        }
+        // New incidence list of s: its live faces, then r's, appended to `refs`.
+        let start = self.refs.len();
+        for k in self.incident(s) {
+            let f = self.refs[k];
+            if self.faces[f as usize][0] != DEAD {
+                self.refs.push(f);
+            }
+        }
+        self.refs.extend_from_slice(&self.scratch_faces);
+        self.links[is] = (start as u32, (self.refs.len() - start) as u32);
+        self.links[ir] = (0, 0);
+
+        // Attributes at the placement's parameter along a → b.
+        let t = placement.t;
+        let (ia, ib) = (a as usize, b as usize);
+        if let Some(n) = &mut self.normals {
+            n[is] = normalized(lerp(n[ia], n[ib], t));
+        }
+        if let Some(u) = &mut self.uvs {
+            u[is] = lerp(u[ia], u[ib], t);
+        }
+        if let Some(c) = &mut self.colors {
+            c[is] = lerp(c[ia], c[ib], t);
+        }
+        let q = self.quadrics[is] + self.quadrics[ir];
+        self.quadrics[is] = q;
+        let removed = self.verts[ir];
+        let survivor = &mut self.verts[is];
+        survivor.position = placement.position;
+        survivor.region_normal =
+            std::array::from_fn(|k| survivor.region_normal[k] + removed.region_normal[k]);
+        survivor.flags |= removed.flags & BOUNDARY;
+        survivor.stamp = pass;
+        self.verts[ir].stamp = DEAD;
+        self.parent[ir] = s;
+        self.collapses += 1;
+        self.max_cost = self.max_cost.max(placement.cost);
+        let weight = q.weight();
+        if weight > 0.0 {
+            self.max_error = self.max_error.max(placement.cost / weight);
+        }
+
+        if self.refs.len() > 4 * self.faces.len() + 1024 {
+            self.compact_refs();
+        }
+    }
+
+    /// Rewrites `refs` with only the live faces of live vertices.
+    fn compact_refs(&mut self) {
+        let mut refs = Vec::with_capacity(3 * self.live_faces);
+        for v in 0..self.links.len() {
+            let range = self.incident(v as u32);
+            let start = refs.len();
+            refs.extend(
+                self.refs[range]
+                    .iter()
+                    .copied()
+                    .filter(|&f| self.faces[f as usize][0] != DEAD),
+            );
+            self.links[v] = (start as u32, (refs.len() - start) as u32);
+        }
+        self.refs = refs;
+    }
+
+    /// Builds the output mesh and the vertex map.
+    pub(crate) fn finish(self, mesh: &TriMesh, stop_reason: StopReason) -> Result<Decimation> {
+        let n = self.verts.len();
+        let alive = |v: usize| self.verts[v].alive();
+        let mut new_index = vec![u32::MAX; n];
+        let mut vertices = Vec::new();
+        for (v, index) in new_index.iter_mut().enumerate() {
+            if alive(v) {
+                *index = vertices.len() as u32;
+                vertices.push(self.verts[v].position);
+            }
+        }
+        let gather3 = |values: &Option<Vec<[f32; 3]>>| {
+            values.as_ref().map(|x| {
+                (0..n)
+                    .filter(|&v| alive(v))
+                    .map(|v| x[v])
+                    .collect::<Vec<_>>()
+            })
+        };
+        let triangles: Vec<[u32; 3]> = self
+            .faces
+            .iter()
+            .filter(|f| f[0] != DEAD)
+            .map(|f| f.map(|v| new_index[v as usize]))
+            .collect();
+        // Each welded vertex's surviving representative, memoised so the work stays linear.
+        let mut root = vec![u32::MAX; n];
+        for v in 0..n {
+            let mut r = v;
+            while !alive(r) && root[r] == u32::MAX {
+                r = self.parent[r] as usize;
+            }
+            let found = if alive(r) { r as u32 } else { root[r] };
+            let mut w = v;
+            while !alive(w) && root[w] == u32::MAX {
+                root[w] = found;
+                w = self.parent[w] as usize;
+            }
+            root[v] = found;
+        }
+        let vertex_map = self
+            .weld_map
+            .iter()
+            .map(|&w| new_index[root[w as usize] as usize])
+            .collect();
+        let mut out = TriMesh::new(vertices, triangles)?;
+        if let Some(normals) = gather3(&self.normals) {
+            out = out.with_normals(normals)?;
+        }
+        if let Some(uvs) = &self.uvs {
+            out = out.with_uvs((0..n).filter(|&v| alive(v)).map(|v| uvs[v]).collect())?;
+        }
+        if let Some(colors) = gather3(&self.colors) {
+            out = out.with_colors(colors)?;
+        }
+        Ok(Decimation {
+            mesh: out,
+            vertex_map,
+            error: self.max_error,
+            error_distance: self.max_error.sqrt(),
+            max_cost: self.max_cost,
+            welded: self.welded,
+            stop_reason,
+            input_faces: mesh.face_count(),
+            input_vertices: mesh.vertex_count(),
+            collapses: self.collapses,
+        })
+    }
+}

@@ -1,0 +1,228 @@
+//! The fixed-width neighbour lists the projector's GNN layer (thesis eq. 5.4) aggregates over:
+//! a k-NN graph (k = 7, ch. 5.6) or a mesh adjacency padded to its largest degree.
+//!
+//! # Conventions
+//! - `indices` is `(N·W)` `u32`, row-major: row `i` holds the `W` neighbour slots of point `i`.
+//! - `weights` is `(N, W, 1)` `f32`: `1 / |N_i|` for a real neighbour and `0` for a padding slot,
+//!   so `Σ_slots weight · f_slot` is exactly the mean `1/|N_i| Σ_{j∈N_i} f_j` of eq. 5.4.
+//! - Padding (mesh adjacencies, whose degrees vary): a row shorter than `W` is filled with the
+//!   point's own index and weight 0. A point with no neighbour (isolated vertex) gets a zero
+//!   mean, i.e. `f'_i = W_c f_i`.
+
+use candle_core::{Device, Tensor};
+use meshgnn_graph::{CsrMatrix, Neighbours};
+use rayon::prelude::*;
+
+use crate::{Error, Result};
+
+/// Neighbour slots and mean weights of every point, `indices: (N·W)`, `weights: (N, W, 1)`.
+#[derive(Clone, Debug)]
+pub struct NeighbourIndex {
+    indices: Tensor,
+    weights: Tensor,
+    mean: CsrMatrix,
+    len: usize,
+    width: usize,
+}
+
+impl NeighbourIndex {
+    /// From rows of neighbour indices (`rows[i]` = the neighbours of point `i`, any lengths;
+    /// each index `< rows.len()`), padded to the longest row as described in the module docs.
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_models::point_simplifier::NeighbourIndex;
+    /// let g = NeighbourIndex::from_rows(&[vec![1, 2], vec![0], vec![]], &Device::Cpu)?;
+    /// assert_eq!((g.len(), g.width()), (3, 2));
+    /// let w: Vec<f32> = g.weights().flatten_all()?.to_vec1()?;
+    /// assert_eq!(w, vec![0.5, 0.5, 1.0, 0.0, 0.0, 0.0]);
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn from_rows(rows: &[Vec<u32>], device: &Device) -> Result<Self> {
+        let n = rows.len();
+        let width = rows.iter().map(Vec::len).max().unwrap_or(0).max(1);
+        let mut indices = Vec::with_capacity(n * width);
+        let mut weights = Vec::with_capacity(n * width);
+        for (i, row) in rows.iter().enumerate() {
+            if let Some(&bad) = row.iter().find(|&&j| j as usize >= n) {
+                return Err(Error::Invalid {
+                    what: format!("neighbour {bad} of point {i}"),
+                    reason: format!("out of range for {n} points"),
+                });
+            }
+            let w = if row.is_empty() {
+                0.0
+            } else {
+                1.0 / row.len() as f32
+            };
+            indices.extend_from_slice(row);
+            weights.extend(std::iter::repeat_n(w, row.len()));
+            let pad = width - row.len();
+            indices.extend(std::iter::repeat_n(i as u32, pad));
+            weights.extend(std::iter::repeat_n(0.0f32, pad));
+        }
+        Self::from_flat(indices, weights, n, width, device)
+    }
+
+    /// From a k-NN graph (`neighbours.indices: #N×k`, e.g. [`meshgnn_graph::knn_graph`] with
+    /// k = 7): every row is full, weights `1/k`.
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_graph::knn_graph;
+    /// use meshgnn_models::point_simplifier::NeighbourIndex;
+    /// let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
+    /// let g = NeighbourIndex::from_knn(&knn_graph(&pts, 2)?, &Device::Cpu)?;
+    /// assert_eq!((g.len(), g.width()), (3, 2));
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn from_knn(neighbours: &Neighbours, device: &Device) -> Result<Self> {
+        let n = neighbours.len();
+        let k = neighbours.k;
+        if let Some(&bad) = neighbours.indices.iter().find(|&&j| j as usize >= n) {
+            return Err(Error::Invalid {
+                what: format!("k-NN neighbour {bad}"),
+                reason: format!("out of range for {n} points"),
+            });
+        }
+        let w = 1.0 / k.max(1) as f32;
+        Self::from_flat(neighbours.indices.clone(), vec![w; n * k], n, k, device)
+    }
+
+    /// From a mesh adjacency `adjacency: #V×#V` (e.g. [`meshgnn_graph::vertex_adjacency`]);
+    /// the stored columns of row `i` are its neighbours (values ignored), padded to the largest
+    /// degree as described in the module docs.
+    pub fn from_adjacency(adjacency: &CsrMatrix, device: &Device) -> Result<Self> {
+        if adjacency.rows() != adjacency.cols() {
+            return Err(Error::Invalid {
+                what: "adjacency".into(),
+                reason: format!(
+                    "must be square, got {}×{}",
+                    adjacency.rows(),
+                    adjacency.cols()
+                ),
+            });
+        }
+        let rows: Vec<Vec<u32>> = (0..adjacency.rows())
+            .map(|i| {
+                adjacency
+                    .row(i)
+                    .0
+                    .iter()
+                    .copied()
+                    .filter(|&j| j as usize != i)
+                    .collect()
+            })
+            .collect();
+        Self::from_rows(&rows, device)
+    }
+
+    fn from_flat(
+        indices: Vec<u32>,
+        weights: Vec<f32>,
+        len: usize,
+        width: usize,
+        device: &Device,
+    ) -> Result<Self> {
+        let mean = mean_matrix(&indices, &weights, len, width)?;
+        Ok(Self {
+            indices: Tensor::from_vec(indices, len * width, device)?,
+            weights: Tensor::from_vec(weights, (len, width, 1), device)?,
+            mean,
+            len,
+            width,
+        })
+    }
+
+    /// The same means as a row-stochastic sparse matrix `#N×#N` (row `i`: `1/|N_i|` at each
+    /// neighbour), for inference without autograd: `mean = A · F`.
+    pub fn mean_matrix(&self) -> &CsrMatrix {
+        &self.mean
+    }
+
+    /// Number of points N.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Slots per point W.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Neighbour slots `(N·W)` `u32`.
+    pub fn indices(&self) -> &Tensor {
+        &self.indices
+    }
+
+    /// Mean weights `(N, W, 1)`.
+    pub fn weights(&self) -> &Tensor {
+        &self.weights
+    }
+}
+
+/// The CSR form of the slots: real neighbours (weight > 0) sorted by index, duplicates merged.
+fn mean_matrix(indices: &[u32], weights: &[f32], len: usize, width: usize) -> Result<CsrMatrix> {
+    let rows: Vec<Vec<(u32, f32)>> = indices
+        .par_chunks(width.max(1))
+        .zip(weights.par_chunks(width.max(1)))
+        .map(|(idx, w)| {
+            let mut row: Vec<(u32, f32)> = idx
+                .iter()
+                .zip(w)
+                .filter(|&(_, &w)| w > 0.0)
+                .map(|(&i, &w)| (i, w))
+                .collect();
+            row.sort_unstable_by_key(|&(i, _)| i);
+            let mut merged: Vec<(u32, f32)> = Vec::with_capacity(row.len());
+            for (i, w) in row {
+                match merged.last_mut() {
+                    Some(last) if last.0 == i => last.1 += w,
+                    _ => merged.push((i, w)),
+                }
+            }
+            merged
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(len + 1);
+    offsets.push(0);
+    let mut cols = Vec::with_capacity(indices.len());
+    let mut vals = Vec::with_capacity(indices.len());
+    for row in rows {
+        for (i, w) in row {
+            cols.push(i);
+            vals.push(w);
+        }
+        offsets.push(cols.len());
+    }
+    Ok(CsrMatrix::from_parts(len, len, offsets, cols, vals)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adjacency_rows_are_padded_with_self_and_zero_weight() {
+        let adj =
+            CsrMatrix::from_triplets(3, 3, &[(0, 1, 1.0), (0, 2, 1.0), (1, 0, 1.0), (2, 0, 1.0)])
+                .unwrap();
+        let g = NeighbourIndex::from_adjacency(&adj, &Device::Cpu).unwrap();
+        assert_eq!(g.width(), 2);
+        let idx: Vec<u32> = g.indices().to_vec1().unwrap();
+        assert_eq!(idx, vec![1, 2, 0, 1, 0, 2]);
+        let w: Vec<f32> = g.weights().flatten_all().unwrap().to_vec1().unwrap();
+        assert_eq!(w, vec![0.5, 0.5, 1.0, 0.0, 1.0, 0.0]);
+        let a = g.mean_matrix();
+        assert_eq!(
+            (a.get(0, 1), a.get(0, 2), a.get(1, 0), a.get(1, 1)),
+            (0.5, 0.5, 1.0, 0.0)
+        );
+        assert!(NeighbourIndex::from_rows(&[vec![3]], &Device::Cpu).is_err());
+    }
+}

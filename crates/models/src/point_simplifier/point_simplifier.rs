@@ -1,0 +1,245 @@
+//! The learnable point-cloud simplifier of thesis ch. 5.3.2 (Potamias, Bouritsas & Zafeiriou
+//! 2022, "Revisiting point cloud simplification: a learnable feature preserving approach",
+//! ECCV): a projector (3 point-wise MLP layers of 64 channels + one GNN layer eq. 5.4) embeds
+//! every point, FPS in that latent space selects the cluster centres, and AttRef (eq. 5.5)
+//! displaces them.
+//!
+//! # Conventions
+//! - Points are in the unit-sphere frame of [`meshgnn_geometry::unit_sphere_normalization`]
+//!   (training data and [`PointSimplifier::simplify`] normalise; `forward` expects it).
+//! - Selection indices are computed without gradient; the selected embeddings are gathered
+//!   from the projector output, so the loss reaches every projector weight through AttRef.
+//! - Parameter names (the safetensors keys): `projector.mlp.{0,1,2}.{linear,norm}.*`,
+//!   `projector.gnn.{centre,neighbour}.*`, `refine.{query,key,phi.0,phi.1,gamma.0,gamma.1}.*`.
+
+use std::time::{Duration, Instant};
+
+use candle_core::{DType, Device, Tensor};
+use candle_nn::VarBuilder;
+
+use super::{
+    AttentionRefinement, LatentSamplingOptions, MeanAggregationGnn, NeighbourIndex, PointMlp,
+    latent_farthest_point_sampling, refinement_graph,
+};
+use crate::{Error, Result};
+
+/// Hyper-parameters; defaults are the thesis' (ch. 5.6) where it states them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PointSimplifierConfig {
+    /// Channels of every projector layer (64).
+    pub hidden: usize,
+    /// Point-wise MLP layers before the GNN (3).
+    pub mlp_layers: usize,
+    /// k of the projector's k-NN graph (7).
+    pub gnn_neighbours: usize,
+    /// k of AttRef's centre-to-input graph (15).
+    pub refine_neighbours: usize,
+    /// Width d of AttRef's query/key projections (not stated in the thesis; 16).
+    pub attention_dim: usize,
+    /// Hidden units of AttRef's φ (not stated; 32). Its output is 3 ("filter size 3").
+    pub phi_hidden: usize,
+    /// Hidden units of AttRef's γ (not stated; 16).
+    pub gamma_hidden: usize,
+}
+
+impl Default for PointSimplifierConfig {
+    fn default() -> Self {
+        Self {
+            hidden: 64,
+            mlp_layers: 3,
+            gnn_neighbours: 7,
+            refine_neighbours: 15,
+            attention_dim: 16,
+            phi_hidden: 32,
+            gamma_hidden: 16,
+        }
+    }
+}
+
+/// Wall-clock time of each stage of one simplification (the thesis' ch. 5.5 speed split).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimings {
+    /// k-NN graph of the projector (or adjacency conversion).
+    pub knn: Duration,
+    /// Point-wise MLPs and GNN.
+    pub projector: Duration,
+    /// Latent FPS (including reading the embeddings back).
+    pub selector: Duration,
+    /// AttRef: its k-NN graph and the layer.
+    pub refinement: Duration,
+}
+
+/// What [`PointSimplifier::forward`] returns.
+#[derive(Clone, Debug)]
+pub struct SimplifierOutput {
+    /// Simplified points `(M, 3)`, differentiable in the model's weights.
+    pub points: Tensor,
+    /// Indices of the selected centres in the input, `#M`, distinct.
+    pub indices: Vec<u32>,
+    /// Stage timings (k-NN left at zero: the graph is an input here).
+    pub timings: StageTimings,
+}
+
+/// The model: projector, latent-FPS selector, AttRef.
+#[derive(Clone, Debug)]
+pub struct PointSimplifier {
+    config: PointSimplifierConfig,
+    mlps: Vec<PointMlp>,
+    gnn: MeanAggregationGnn,
+    refine: AttentionRefinement,
+    device: Device,
+}
+
+impl PointSimplifier {
+    /// Builds the model with parameters under `vb` (fresh from a `VarMap`, or loaded from a
+    /// checkpoint).
+    ///
+    /// ```
+    /// use candle_core::{DType, Device};
+    /// use candle_nn::{VarBuilder, VarMap};
+    /// use meshgnn_models::point_simplifier::{PointSimplifier, PointSimplifierConfig};
+    /// let map = VarMap::new();
+    /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
+    /// let model = PointSimplifier::new(vb, &PointSimplifierConfig::default())?;
+    /// assert_eq!(model.config().hidden, 64);
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn new(vb: VarBuilder, config: &PointSimplifierConfig) -> Result<Self> {
+        let c = *config;
+        for (name, v) in [
+            ("hidden", c.hidden),
+            ("mlp_layers", c.mlp_layers),
+            ("gnn_neighbours", c.gnn_neighbours),
+            ("refine_neighbours", c.refine_neighbours),
+            ("attention_dim", c.attention_dim),
+            ("phi_hidden", c.phi_hidden),
+            ("gamma_hidden", c.gamma_hidden),
+        ] {
+            if v == 0 {
+                return Err(Error::Invalid {
+                    what: format!("config.{name}"),
+                    reason: "must be at least 1".into(),
+                });
+            }
+        }
+        let device = vb.device().clone();
+        let pv = vb.pp("projector");
+        let mlps = (0..c.mlp_layers)
+            .map(|i| {
+                let input = if i == 0 { 3 } else { c.hidden };
+                PointMlp::new(pv.pp(format!("mlp.{i}")), input, c.hidden)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let gnn = MeanAggregationGnn::new(pv.pp("gnn"), c.hidden, c.hidden)?;
+        let refine = AttentionRefinement::new(
+            vb.pp("refine"),
+            c.hidden,
+            c.attention_dim,
+            c.phi_hidden,
+            c.gamma_hidden,
+        )?;
+        Ok(Self {
+            config: c,
+            mlps,
+            gnn,
+            refine,
+            device,
+        })
+    }
+
+    /// The hyper-parameters.
+    pub fn config(&self) -> &PointSimplifierConfig {
+        &self.config
+    }
+
+    /// The device the weights live on.
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// The projector: `points: (N, 3)` and their `graph` → embeddings `(N, C)` (3 × MLP, then
+    /// eq. 5.4). `train` uses batch statistics in the batch norms.
+    pub fn project(&self, points: &Tensor, graph: &NeighbourIndex, train: bool) -> Result<Tensor> {
+        let mut x = points.clone();
+        for mlp in &self.mlps {
+            x = mlp.forward_t(&x, train)?;
+        }
+        self.gnn.forward(&x, graph)
+    }
+
+    /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
+    /// keeps `target` points (`1 ≤ target ≤ N`) chosen by latent FPS (`selection`, `seed`) and
+    /// refined by AttRef. Errors on a bad target, a graph over a different N or non-finite
+    /// points.
+    pub fn forward(
+        &self,
+        points: &[[f32; 3]],
+        graph: &NeighbourIndex,
+        target: usize,
+        selection: LatentSamplingOptions,
+        seed: u64,
+        train: bool,
+    ) -> Result<SimplifierOutput> {
+        let n = points.len();
+        if target == 0 || target > n {
+            return Err(Error::Invalid {
+                what: "target count".into(),
+                reason: format!("must be in 1..={n} for {n} points, got {target}"),
+            });
+        }
+        if graph.len() != n {
+            return Err(Error::Invalid {
+                what: "projector graph".into(),
+                reason: format!("covers {} points, the cloud has {n}", graph.len()),
+            });
+        }
+        if let Some(i) = points.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+            return Err(Error::Invalid {
+                what: format!("point {i}"),
+                reason: "has a non-finite coordinate".into(),
+            });
+        }
+        let t0 = Instant::now();
+        let input = Tensor::from_slice(points.as_flattened(), (n, 3), &self.device)?;
+        let embeddings = self.project(&input, graph, train)?;
+        let t1 = Instant::now();
+        let latent: Vec<f32> = embeddings
+            .detach()
+            .to_dtype(DType::F32)?
+            .flatten_all()?
+            .to_vec1()?;
+        let indices = latent_farthest_point_sampling(
+            &latent,
+            self.config.hidden,
+            points,
+            target,
+            selection,
+            seed,
+        )?;
+        let t2 = Instant::now();
+        let rgraph = refinement_graph(
+            points,
+            &indices,
+            self.config.refine_neighbours,
+            &self.device,
+        )?;
+        let displacement = if embeddings.track_op() {
+            self.refine.forward(&embeddings, &rgraph)?
+        } else {
+            self.refine
+                .forward_host(&latent, self.config.hidden, &rgraph)?
+        };
+        let simplified = rgraph.positions.add(&displacement)?;
+        let t3 = Instant::now();
+        Ok(SimplifierOutput {
+            points: simplified,
+            indices,
+            timings: StageTimings {
+                knn: Duration::ZERO,
+                projector: t1 - t0,
+                selector: t2 - t1,
+                refinement: t3 - t2,
+            },
+        })
+    }
+}

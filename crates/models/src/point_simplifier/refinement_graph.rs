@@ -1,0 +1,124 @@
+//! The k-NN graph between the selected cluster centres and the input points that AttRef
+//! (thesis eq. 5.5, k = 15) refines over, with the neighbour offsets it consumes.
+//!
+//! # Conventions
+//! - Row `i` lists the `k` input points nearest to centre `i` (the centre itself first, at
+//!   offset 0), `neighbours: (M·k)` `u32`.
+//! - Offsets are expressed in units of the centre's neighbourhood radius
+//!   `s_i = (1/k Σ_j ‖p_j − p_{c_i}‖²)^{1/2}`: `offsets = (p_j − p_{c_i}) / s_i`, `(M·k, 3)`,
+//!   and AttRef multiplies its output by `s_i` (`scales: (M, 1)`). Beyond the thesis: this makes
+//!   the layer invariant to the sampling density, so weights trained on clouds of a few
+//!   thousand points apply unchanged to millions. A centre whose neighbours all coincide with
+//!   it gets `s_i = 0` (no displacement).
+//! - Everything here is a constant of the autograd graph: positions are inputs, not outputs
+//!   of learnable layers.
+
+use candle_core::{Device, Tensor};
+use meshgnn_graph::knn_query;
+use rayon::prelude::*;
+
+use crate::{Error, Result};
+
+/// Centres, their neighbours in the input cloud and normalised offsets (see module docs).
+#[derive(Clone, Debug)]
+pub struct RefinementGraph {
+    /// Selected centre indices into the input, `(M)` `u32`.
+    pub centres: Tensor,
+    /// Neighbour indices into the input, `(M·k)` `u32`, nearest first.
+    pub neighbours: Tensor,
+    /// `(p_j − p_c) / s_c`, `(M·k, 3)`.
+    pub offsets: Tensor,
+    /// Neighbourhood radius `s_c`, `(M, 1)`.
+    pub scales: Tensor,
+    /// Centre positions `p_c`, `(M, 3)`.
+    pub positions: Tensor,
+    /// Neighbours per centre k.
+    pub k: usize,
+}
+
+/// Builds the AttRef graph of `centres: #M` (indices into `points: #N×3`) with `k` neighbours
+/// each (15 in the thesis; capped at N). O((N + M k) log N), parallel over centres.
+///
+/// ```
+/// use candle_core::Device;
+/// use meshgnn_models::point_simplifier::refinement_graph;
+/// let pts = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [9.0, 9.0, 9.0]];
+/// let g = refinement_graph(&pts, &[0], 3, &Device::Cpu)?;
+/// let s: Vec<f32> = g.scales.flatten_all()?.to_vec1()?;
+/// assert!((s[0] - (8.0f32 / 3.0).sqrt()).abs() < 1e-6); // (0 + 4 + 4) / 3
+/// # Ok::<(), meshgnn_models::Error>(())
+/// ```
+pub fn refinement_graph(
+    points: &[[f32; 3]],
+    centres: &[u32],
+    k: usize,
+    device: &Device,
+) -> Result<RefinementGraph> {
+    let n = points.len();
+    if let Some(&bad) = centres.iter().find(|&&c| c as usize >= n) {
+        return Err(Error::Invalid {
+            what: format!("centre {bad}"),
+            reason: format!("out of range for {n} points"),
+        });
+    }
+    let k = k.min(n);
+    let m = centres.len();
+    let centre_points: Vec<[f32; 3]> = centres
+        .iter()
+        .filter_map(|&c| points.get(c as usize).copied())
+        .collect();
+    let nn = knn_query(&centre_points, points, k)?;
+    let mut offsets = vec![0f32; m * k * 3];
+    let mut scales = vec![0f32; m];
+    offsets
+        .par_chunks_mut(k * 3)
+        .zip(scales.par_iter_mut())
+        .enumerate()
+        .for_each(|(i, (off, scale))| {
+            let c = centre_points.get(i).copied().unwrap_or([0.0; 3]);
+            let row = nn.row(i);
+            let mean_sq = row
+                .iter()
+                .filter_map(|&j| points.get(j as usize))
+                .map(|p| (0..3).map(|d| f64::from(p[d] - c[d]).powi(2)).sum::<f64>())
+                .sum::<f64>()
+                / k as f64;
+            let s = mean_sq.sqrt() as f32;
+            *scale = s;
+            let inv = if s > 0.0 { 1.0 / s } else { 0.0 };
+            for (o, &j) in off.chunks_exact_mut(3).zip(row) {
+                if let Some(p) = points.get(j as usize) {
+                    for d in 0..3 {
+                        o[d] = (p[d] - c[d]) * inv;
+                    }
+                }
+            }
+        });
+    Ok(RefinementGraph {
+        centres: Tensor::from_slice(centres, m, device)?,
+        neighbours: Tensor::from_vec(nn.indices, m * k, device)?,
+        offsets: Tensor::from_vec(offsets, (m * k, 3), device)?,
+        scales: Tensor::from_vec(scales, (m, 1), device)?,
+        positions: Tensor::from_vec(centre_points.into_flattened(), (m, 3), device)?,
+        k,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_are_in_units_of_the_neighbourhood_radius() {
+        let pts = [[1.0, 1.0, 1.0], [1.0, 1.0, 3.0], [9.0, 9.0, 9.0]];
+        let g = refinement_graph(&pts, &[0, 2], 2, &Device::Cpu).unwrap();
+        let off: Vec<Vec<f32>> = g.offsets.to_vec2().unwrap();
+        // centre 0: neighbours 0 (itself), 1 at +2 z; s = sqrt(4/2) = √2
+        let r2 = 2f32.sqrt();
+        assert_eq!(off[0], vec![0.0, 0.0, 0.0]);
+        assert!((off[1][2] - 2.0 / r2).abs() < 1e-6);
+        let nb: Vec<u32> = g.neighbours.to_vec1().unwrap();
+        assert_eq!(nb, vec![0, 1, 2, 1]);
+        assert!(refinement_graph(&pts, &[3], 2, &Device::Cpu).is_err());
+    }
+}

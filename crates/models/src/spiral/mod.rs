@@ -1,0 +1,27 @@
+//! "Handy++", the spiral-convolution mesh autoencoder of thesis ch. 3.3.4 (Table 3.1), its
+//! layers (spiral convolution eq. 2.28-2.29, pooling and unpooling), template tensors,
+//! normalisation, self-contained model files and training loop.
+
+mod mesh_batch;
+mod pool;
+mod seeded_initialization;
+mod spiral_autoencoder;
+mod spiral_conv;
+mod spiral_morphable_model;
+mod template_tensors;
+#[cfg(test)]
+mod test_fixtures;
+mod training;
+mod unpool;
+mod vertex_normalization;
+
+pub use mesh_batch::mesh_batch;
+pub use pool::Pool;
+pub use seeded_initialization::seeded_initialization;
+pub use spiral_autoencoder::{Activation, SpiralAutoencoder, SpiralAutoencoderConfig};
+pub use spiral_conv::{SpiralConv, SpiralConvConfig, SpiralPadding};
+pub use spiral_morphable_model::{SPIRAL_MODEL_FORMAT, SpiralMorphableModel};
+pub use template_tensors::TemplateTensors;
+pub use training::{TrainConfig, TrainProgress, TrainedModel, TrainingState, train_spiral_model};
+pub use unpool::Unpool;
+pub use vertex_normalization::VertexNormalization;

@@ -1,0 +1,479 @@
+//! "Handy++" as a usable morphable model (thesis ch. 3.3.4): the spiral autoencoder, its
+//! template tensors, the per-vertex normalisation of the training data and the config, saved
+//! together in one self-contained safetensors file. Encodes and decodes in data units
+//! (millimetres for the synthetic hands).
+//!
+//! # File format (safetensors)
+//! - Tensors: the network parameters (names in [`crate::spiral::SpiralAutoencoder`]'s docs),
+//!   `normalization.mean` / `normalization.std` `(V, 3)` f32, and the template under
+//!   `template.` (table in [`crate::spiral::TemplateTensors`]'s docs).
+//! - Metadata: one entry `meshgnn`, a JSON object (sorted keys, so the bytes are
+//!   deterministic) with `format` = [`SPIRAL_MODEL_FORMAT`], `config` = the
+//!   [`SpiralAutoencoderConfig`], and for training checkpoints `training` (JSON string of the
+//!   [`crate::spiral::TrainingState`]). `load_with_metadata` returns these entries as strings.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use candle_core::{DType, Device, Tensor};
+use candle_nn::{VarBuilder, VarMap};
+use meshgnn_geometry::TriMesh;
+
+use crate::spiral::{
+    SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
+    seeded_initialization,
+};
+use crate::{Error, MorphableModel, Result};
+
+/// The `format` metadata value of a spiral morphable model file.
+pub const SPIRAL_MODEL_FORMAT: &str = "meshgnn.spiral_morphable_model.v1";
+
+const METADATA_KEY: &str = "meshgnn";
+const TEMPLATE_PREFIX: &str = "template.";
+const MEAN: &str = "normalization.mean";
+const STD: &str = "normalization.std";
+
+/// Spiral autoencoder + template + normalisation + config: a complete neural morphable model.
+pub struct SpiralMorphableModel {
+    config: SpiralAutoencoderConfig,
+    template: TemplateTensors,
+    normalization: VertexNormalization,
+    network: SpiralAutoencoder,
+    vars: VarMap,
+}
+
+impl std::fmt::Debug for SpiralMorphableModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SpiralMorphableModel")
+            .field("config", &self.config)
+            .field("vertices", &self.network.vertex_count())
+            .finish_non_exhaustive()
+    }
+}
+
+impl SpiralMorphableModel {
+    /// A freshly initialised model (weights from `seed`) on `template`, whose hierarchy is
+    /// built from `config.hierarchy_options()`; `normalization` is usually
+    /// [`VertexNormalization::fit`] of the training meshes.
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_models::MorphableModel;
+    /// use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralMorphableModel, VertexNormalization};
+    /// let sphere = meshgnn_geometry::icosphere(2);
+    /// let cfg = SpiralAutoencoderConfig { channels: vec![8, 16], factors: vec![4.0; 2],
+    ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
+    /// let norm = VertexNormalization::fit(&[sphere.vertices().to_vec()], &Device::Cpu)?;
+    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, 0, &Device::Cpu)?;
+    /// assert_eq!((model.latent_size(), model.template().vertex_count()), (8, 162));
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn new(
+        template: &TriMesh,
+        config: &SpiralAutoencoderConfig,
+        normalization: VertexNormalization,
+        seed: u64,
+        device: &Device,
+    ) -> Result<Self> {
+        config.validate(None)?;
+        let tensors = TemplateTensors::new(template, &config.hierarchy_options(), device)?;
+        Self::from_template_tensors(tensors, config, normalization, seed)
+    }
+
+    /// A freshly initialised model (weights from `seed`) on an already built template.
+    pub fn from_template_tensors(
+        template: TemplateTensors,
+        config: &SpiralAutoencoderConfig,
+        normalization: VertexNormalization,
+        seed: u64,
+    ) -> Result<Self> {
+        let model = Self::assemble(template, config, normalization)?;
+        seeded_initialization(&model.vars, seed)?;
+        Ok(model)
+    }
+
+    fn assemble(
+        template: TemplateTensors,
+        config: &SpiralAutoencoderConfig,
+        normalization: VertexNormalization,
+    ) -> Result<Self> {
+        let v = template.template().vertex_count();
+        if normalization.mean().dims() != [v, 3] {
+            return Err(Error::Invalid {
+                what: "vertex normalisation".into(),
+                reason: format!(
+                    "shape {:?}, the template has {v} vertices",
+                    normalization.mean().dims()
+                ),
+            });
+        }
+        let device = template.device().clone();
+        let normalization = VertexNormalization::from_tensors(
+            normalization.mean().to_device(&device)?,
+            normalization.std().to_device(&device)?,
+        )?;
+        let vars = VarMap::new();
+        let network = SpiralAutoencoder::new(
+            VarBuilder::from_varmap(&vars, DType::F32, &device),
+            config,
+            &template,
+        )?;
+        Ok(Self {
+            config: config.clone(),
+            template,
+            normalization,
+            network,
+            vars,
+        })
+    }
+
+    /// The network's hyper-parameters.
+    pub fn config(&self) -> &SpiralAutoencoderConfig {
+        &self.config
+    }
+
+    /// The template hierarchy tensors.
+    pub fn template_tensors(&self) -> &TemplateTensors {
+        &self.template
+    }
+
+    /// The per-vertex normalisation of the training data.
+    pub fn normalization(&self) -> &VertexNormalization {
+        &self.normalization
+    }
+
+    /// The autoencoder, working on normalised coordinates.
+    pub fn network(&self) -> &SpiralAutoencoder {
+        &self.network
+    }
+
+    /// The trainable parameters (for an optimiser).
+    pub fn vars(&self) -> &VarMap {
+        &self.vars
+    }
+
+    /// Decode of encode in data units: `vertices: (B, V, 3)` → `(B, V, 3)`.
+    pub fn reconstruct(&self, vertices: &Tensor) -> Result<Tensor> {
+        self.decode(&self.encode(vertices)?)
+    }
+
+    /// The model file's bytes (format in the module docs), with `metadata` entries added
+    /// (`format` and `config` are reserved and always written by the model).
+    pub fn to_bytes(&self, metadata: &[(&str, String)]) -> Result<Vec<u8>> {
+        let mut tensors = self.template.to_named_tensors(TEMPLATE_PREFIX)?;
+        tensors.insert(
+            MEAN.into(),
+            self.normalization.mean().to_device(&Device::Cpu)?,
+        );
+        tensors.insert(
+            STD.into(),
+            self.normalization.std().to_device(&Device::Cpu)?,
+        );
+        for (name, var) in lock(&self.vars)?.iter() {
+            tensors.insert(name.clone(), var.as_tensor().to_device(&Device::Cpu)?);
+        }
+        let config = serde_json::to_value(&self.config).map_err(|e| Error::Invalid {
+            what: "model config".into(),
+            reason: format!("cannot serialise: {e}"),
+        })?;
+        // One metadata entry holding a sorted JSON object, so the file bytes are deterministic.
+        // `format` and `config` are inserted last: an extra entry cannot replace them.
+        let mut entries = serde_json::Map::new();
+        for (k, v) in metadata {
+            entries.insert((*k).to_string(), v.clone().into());
+        }
+        entries.insert("format".into(), SPIRAL_MODEL_FORMAT.into());
+        entries.insert("config".into(), config);
+        let info = HashMap::from([(
+            METADATA_KEY.to_string(),
+            serde_json::Value::Object(entries).to_string(),
+        )]);
+        safetensors::tensor::serialize(tensors, Some(info)).map_err(|e| Error::Invalid {
+            what: "model file".into(),
+            reason: format!("cannot serialise: {e}"),
+        })
+    }
+
+    /// Writes the model to `path` atomically (temporary file + rename).
+    pub fn save(&self, path: &Path) -> Result<()> {
+        self.save_with_metadata(path, &[])
+    }
+
+    /// [`SpiralMorphableModel::save`] with extra metadata entries (e.g. training state).
+    pub fn save_with_metadata(&self, path: &Path, metadata: &[(&str, String)]) -> Result<()> {
+        let bytes = self.to_bytes(metadata).map_err(|e| checkpoint(path, e))?;
+        meshgnn_geometry::atomic_write(path, &bytes)?;
+        Ok(())
+    }
+
+    /// Reads a model written by [`SpiralMorphableModel::save`] onto `device`; errors name the
+    /// file and the missing or malformed tensor.
+    pub fn load(path: &Path, device: &Device) -> Result<Self> {
+        Ok(Self::load_with_metadata(path, device)?.0)
+    }
+
+    /// [`SpiralMorphableModel::load`], also returning the file's metadata.
+    pub fn load_with_metadata(
+        path: &Path,
+        device: &Device,
+    ) -> Result<(Self, HashMap<String, String>)> {
+        let bytes = std::fs::read(path).map_err(|e| Error::Checkpoint {
+            path: path.to_path_buf(),
+            reason: format!("cannot read: {e}"),
+        })?;
+        Self::from_bytes_with_metadata(&bytes, device).map_err(|e| checkpoint(path, e))
+    }
+
+    /// A model from the bytes of a model file (e.g. weights embedded with `include_bytes!`).
+    ///
+    /// ```
+    /// use candle_core::{Device, Tensor};
+    /// use meshgnn_models::MorphableModel;
+    /// use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralMorphableModel, VertexNormalization};
+    /// let sphere = meshgnn_geometry::icosphere(2);
+    /// let cfg = SpiralAutoencoderConfig { channels: vec![8, 16], factors: vec![4.0; 2],
+    ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
+    /// let norm = VertexNormalization::fit(&[sphere.vertices().to_vec()], &Device::Cpu)?;
+    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, 0, &Device::Cpu)?;
+    /// let copy = SpiralMorphableModel::from_bytes(&model.to_bytes(&[])?, &Device::Cpu)?;
+    /// let z = Tensor::ones((1, 8), candle_core::DType::F32, &Device::Cpu)?;
+    /// let (a, b) = (model.decode(&z)?, copy.decode(&z)?);
+    /// assert_eq!(a.flatten_all()?.to_vec1::<f32>()?, b.flatten_all()?.to_vec1::<f32>()?);
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn from_bytes(bytes: &[u8], device: &Device) -> Result<Self> {
+        Ok(Self::from_bytes_with_metadata(bytes, device)?.0)
+    }
+
+    /// [`SpiralMorphableModel::from_bytes`], also returning the file's metadata.
+    pub fn from_bytes_with_metadata(
+        bytes: &[u8],
+        device: &Device,
+    ) -> Result<(Self, HashMap<String, String>)> {
+        let invalid = |reason: String| Error::Invalid {
+            what: "model file".into(),
+            reason,
+        };
+        let (_, header) = safetensors::SafeTensors::read_metadata(bytes)
+            .map_err(|e| invalid(format!("not a safetensors file: {e}")))?;
+        let metadata: HashMap<String, String> = header
+            .metadata()
+            .as_ref()
+            .and_then(|m| m.get(METADATA_KEY))
+            .and_then(|json| {
+                serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(json).ok()
+            })
+            .map(|entries| {
+                entries
+                    .into_iter()
+                    .map(|(k, v)| match v {
+                        serde_json::Value::String(s) => (k, s),
+                        other => (k, other.to_string()),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        match metadata.get("format") {
+            Some(f) if f == SPIRAL_MODEL_FORMAT => {}
+            other => {
+                return Err(invalid(format!(
+                    "format {other:?}, expected {SPIRAL_MODEL_FORMAT:?}"
+                )));
+            }
+        }
+        let config: SpiralAutoencoderConfig = metadata
+            .get("config")
+            .ok_or_else(|| invalid("no `config` metadata".into()))
+            .and_then(|c| {
+                serde_json::from_str(c).map_err(|e| invalid(format!("bad `config`: {e}")))
+            })?;
+        config.validate(None)?;
+        let tensors = candle_core::safetensors::load_buffer(bytes, device)
+            .map_err(|e| invalid(format!("unreadable tensors: {e}")))?;
+        let template = TemplateTensors::from_named_tensors(&tensors, TEMPLATE_PREFIX, device)?;
+        let get = |name: &str| {
+            tensors.get(name).cloned().ok_or_else(|| Error::Invalid {
+                what: format!("tensor `{name}`"),
+                reason: "missing from the model file".into(),
+            })
+        };
+        let normalization = VertexNormalization::from_tensors(get(MEAN)?, get(STD)?)?;
+        let model = Self::assemble(template, &config, normalization)?;
+        for (name, var) in lock(&model.vars)?.iter() {
+            let value = get(name)?;
+            if value.dims() != var.dims() || value.dtype() != var.dtype() {
+                return Err(Error::Invalid {
+                    what: format!("tensor `{name}`"),
+                    reason: format!(
+                        "{:?} {:?}, the config needs {:?} {:?}",
+                        value.dtype(),
+                        value.dims(),
+                        var.dtype(),
+                        var.dims()
+                    ),
+                });
+            }
+            var.set(&value)?;
+        }
+        Ok((model, metadata))
+    }
+}
+
+impl MorphableModel for SpiralMorphableModel {
+    fn latent_size(&self) -> usize {
+        self.network.latent_size()
+    }
+
+    fn template(&self) -> &TriMesh {
+        self.template.template()
+    }
+
+    /// `vertices: (B, V, 3)` in data units → `(B, Z)`.
+    fn encode(&self, vertices: &Tensor) -> Result<Tensor> {
+        let v = self.network.vertex_count();
+        if vertices.dims().len() != 3 || vertices.dim(1).ok() != Some(v) {
+            return Err(Error::Invalid {
+                what: "vertices".into(),
+                reason: format!("shape {:?}, expected (B, {v}, 3)", vertices.dims()),
+            });
+        }
+        let x = self
+            .normalization
+            .normalize(&vertices.to_dtype(DType::F32)?)?;
+        self.network.encode(&x)
+    }
+
+    /// `latents: (B, Z)` → `(B, V, 3)` in data units.
+    fn decode(&self, latents: &Tensor) -> Result<Tensor> {
+        let y = self.network.decode(&latents.to_dtype(DType::F32)?)?;
+        self.normalization.denormalize(&y)
+    }
+}
+
+fn lock(vars: &VarMap) -> Result<std::sync::MutexGuard<'_, HashMap<String, candle_core::Var>>> {
+    vars.data().lock().map_err(|_| Error::Invalid {
+        what: "model variables".into(),
+        reason: "lock poisoned by a panic in another thread".into(),
+    })
+}
+
+fn checkpoint(path: &Path, error: Error) -> Error {
+    match error {
+        Error::Checkpoint { .. } => error,
+        other => Error::Checkpoint {
+            path: path.to_path_buf(),
+            reason: other.to_string(),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spiral::mesh_batch;
+    use crate::spiral::test_fixtures::{deformed_shapes, tiny_config};
+
+    fn model(seed: u64) -> (SpiralMorphableModel, Tensor) {
+        let sphere = meshgnn_geometry::icosphere(2);
+        let shapes = deformed_shapes(&sphere, 4);
+        let norm = VertexNormalization::fit(&shapes, &Device::Cpu).unwrap();
+        let m =
+            SpiralMorphableModel::new(&sphere, &tiny_config(8), norm, seed, &Device::Cpu).unwrap();
+        (m, mesh_batch(&shapes, &Device::Cpu).unwrap())
+    }
+
+    fn values(t: &Tensor) -> Vec<f32> {
+        t.flatten_all().unwrap().to_vec1().unwrap()
+    }
+
+    #[test]
+    fn save_load_round_trip_is_bit_identical() {
+        let (m, x) = model(3);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("hand.safetensors");
+        m.save(&path).unwrap();
+        let back = SpiralMorphableModel::load(&path, &Device::Cpu).unwrap();
+        assert_eq!(back.config(), m.config());
+        assert_eq!(
+            back.template_tensors().hierarchy(),
+            m.template_tensors().hierarchy()
+        );
+        assert_eq!(
+            values(&back.encode(&x).unwrap()),
+            values(&m.encode(&x).unwrap())
+        );
+        assert_eq!(
+            values(&back.reconstruct(&x).unwrap()),
+            values(&m.reconstruct(&x).unwrap())
+        );
+        // The same seed gives the same weights; another seed does not.
+        assert_eq!(
+            values(&model(3).0.encode(&x).unwrap()),
+            values(&m.encode(&x).unwrap())
+        );
+        assert_ne!(
+            values(&model(4).0.encode(&x).unwrap()),
+            values(&m.encode(&x).unwrap())
+        );
+        // Saving is deterministic.
+        assert_eq!(m.to_bytes(&[]).unwrap(), back.to_bytes(&[]).unwrap());
+    }
+
+    #[test]
+    fn missing_or_malformed_tensors_are_named() {
+        let (m, _) = model(0);
+        let bytes = m.to_bytes(&[]).unwrap();
+        let parsed = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+        let metadata = safetensors::SafeTensors::read_metadata(&bytes)
+            .unwrap()
+            .1
+            .metadata()
+            .clone();
+        for dropped in [
+            "encoder.conv1.weight",
+            "template.pool0.up_weights",
+            "normalization.std",
+        ] {
+            let kept: Vec<(String, safetensors::tensor::TensorView)> = parsed
+                .tensors()
+                .into_iter()
+                .filter(|(n, _)| n != dropped)
+                .collect();
+            let broken = safetensors::tensor::serialize(kept, metadata.clone()).unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("broken.safetensors");
+            std::fs::write(&path, &broken).unwrap();
+            let err = SpiralMorphableModel::load(&path, &Device::Cpu)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains(dropped) && err.contains("broken.safetensors"),
+                "{err}"
+            );
+        }
+        assert!(SpiralMorphableModel::from_bytes(&bytes[..bytes.len() / 2], &Device::Cpu).is_err());
+        assert!(SpiralMorphableModel::from_bytes(b"not a model", &Device::Cpu).is_err());
+        let err =
+            SpiralMorphableModel::load(Path::new("/nonexistent/model.safetensors"), &Device::Cpu)
+                .unwrap_err();
+        assert!(err.to_string().contains("/nonexistent/model.safetensors"));
+    }
+
+    #[test]
+    fn data_units_and_shape_checks() {
+        let (m, x) = model(1);
+        assert_eq!(m.latent_size(), 8);
+        assert_eq!(m.template().vertex_count(), 162);
+        let z = m.encode(&x).unwrap();
+        let y = m.decode(&z).unwrap();
+        assert_eq!(y.dims(), &[4, 162, 3]);
+        // decode = denormalise(network decode).
+        let direct = m
+            .normalization()
+            .denormalize(&m.network().decode(&z).unwrap())
+            .unwrap();
+        assert_eq!(values(&y), values(&direct));
+        assert!(m.encode(&x.narrow(1, 0, 10).unwrap()).is_err());
+        assert!(m.encode(&x.flatten_all().unwrap()).is_err());
+    }
+}
