@@ -11,6 +11,7 @@ use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
 use super::NeighbourIndex;
+use super::fused_projector::HostAffine;
 use crate::{Error, Result};
 
 /// Points per gather chunk (bounds the `chunk × W × C` temporary to ≈ 60 MB at W = 7, C = 64).
@@ -49,6 +50,19 @@ impl MeanAggregationGnn {
     /// From raw parts (tests, hand-set weights): `centre` is `W_c` (+ bias), `neighbour` `W_n`.
     pub fn from_parts(centre: Linear, neighbour: Linear) -> Self {
         Self { centre, neighbour }
+    }
+
+    /// `(W_c with b, W_n)` packed for the fused host projector.
+    pub(crate) fn host_affines(&self) -> Result<(HostAffine, HostAffine)> {
+        let centre = HostAffine::from_transposed(
+            &self.centre.weight().detach().t()?.contiguous()?,
+            self.centre.bias().map(|b| b.detach()).as_ref(),
+        )?;
+        let neighbour = HostAffine::from_transposed(
+            &self.neighbour.weight().detach().t()?.contiguous()?,
+            self.neighbour.bias().map(|b| b.detach()).as_ref(),
+        )?;
+        Ok((centre, neighbour))
     }
 
     /// Eq. 5.4: `features: (N, C_in)`, `graph` over the same N points → `(N, C_out)`.

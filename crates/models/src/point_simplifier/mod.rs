@@ -3,6 +3,7 @@
 
 mod attention_refinement;
 mod checkpoint;
+mod fused_projector;
 mod latent_sampling;
 mod mean_aggregation_gnn;
 mod neighbour_index;

@@ -12,6 +12,7 @@
 use candle_core::Tensor;
 use candle_nn::{BatchNorm, Linear, Module, ModuleT, VarBuilder};
 
+use super::fused_projector::HostAffine;
 use crate::Result;
 
 /// `x ↦ ReLU(BN(W x + b))` per point (ch. 5.6: "MLP followed by Batch Normalization and ReLU").
@@ -58,6 +59,17 @@ impl PointMlp {
         }
         let (w, b) = self.folded()?;
         Ok(features.matmul(&w)?.broadcast_add(&b)?.relu()?)
+    }
+
+    /// The evaluation-mode map packed for the fused host projector.
+    pub(crate) fn host_affine(&self) -> Result<HostAffine> {
+        let (w, b) = self.folded()?;
+        HostAffine::from_transposed(&w, Some(&b))
+    }
+
+    /// Whether the weights are trainable variables (autograd must see them).
+    pub(crate) fn is_trainable(&self) -> bool {
+        self.linear.weight().track_op()
     }
 
     /// The evaluation-mode affine map: `W'ᵀ (C_in, C_out)` contiguous and `b' (C_out)`.

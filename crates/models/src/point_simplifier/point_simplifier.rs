@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
 
+use super::fused_projector::FusedProjector;
 use super::{
     AttentionRefinement, LatentSamplingOptions, MeanAggregationGnn, NeighbourIndex, PointMlp,
     latent_farthest_point_sampling, refinement_graph,
@@ -167,6 +168,25 @@ impl PointSimplifier {
         self.gnn.forward(&x, graph)
     }
 
+    /// The projector as fused host loops when nothing needs autograd (evaluation mode, plain
+    /// weights on the CPU); `None` otherwise.
+    pub(crate) fn fused_projector(&self, train: bool) -> Result<Option<FusedProjector>> {
+        if train || !self.device.is_cpu() || self.mlps.iter().any(PointMlp::is_trainable) {
+            return Ok(None);
+        }
+        let layers = self
+            .mlps
+            .iter()
+            .map(PointMlp::host_affine)
+            .collect::<Result<Vec<_>>>()?;
+        let (centre, neighbour) = self.gnn.host_affines()?;
+        Ok(Some(FusedProjector {
+            layers,
+            centre,
+            neighbour,
+        }))
+    }
+
     /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
     /// keeps `target` points (`1 ≤ target ≤ N`) chosen by latent FPS (`selection`, `seed`) and
     /// refined by AttRef. Errors on a bad target, a graph over a different N or non-finite
@@ -200,14 +220,19 @@ impl PointSimplifier {
             });
         }
         let t0 = Instant::now();
-        let input = Tensor::from_slice(points.as_flattened(), (n, 3), &self.device)?;
-        let embeddings = self.project(&input, graph, train)?;
+        let (embeddings, latent) = if let Some(fused) = self.fused_projector(train)? {
+            (None, fused.project(points, graph)?)
+        } else {
+            let input = Tensor::from_slice(points.as_flattened(), (n, 3), &self.device)?;
+            let embeddings = self.project(&input, graph, train)?;
+            let latent: Vec<f32> = embeddings
+                .detach()
+                .to_dtype(DType::F32)?
+                .flatten_all()?
+                .to_vec1()?;
+            (Some(embeddings), latent)
+        };
         let t1 = Instant::now();
-        let latent: Vec<f32> = embeddings
-            .detach()
-            .to_dtype(DType::F32)?
-            .flatten_all()?
-            .to_vec1()?;
         let indices = latent_farthest_point_sampling(
             &latent,
             self.config.hidden,
@@ -223,11 +248,11 @@ impl PointSimplifier {
             self.config.refine_neighbours,
             &self.device,
         )?;
-        let displacement = if embeddings.track_op() {
-            self.refine.forward(&embeddings, &rgraph)?
-        } else {
-            self.refine
-                .forward_host(&latent, self.config.hidden, &rgraph)?
+        let displacement = match embeddings.filter(Tensor::track_op) {
+            Some(embeddings) => self.refine.forward(&embeddings, &rgraph)?,
+            None => self
+                .refine
+                .forward_host(&latent, self.config.hidden, &rgraph)?,
         };
         let simplified = rgraph.positions.add(&displacement)?;
         let t3 = Instant::now();

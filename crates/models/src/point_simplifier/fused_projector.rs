@@ -1,0 +1,264 @@
+//! The projector of thesis ch. 5.3.2 at inference, in plain Rust: the point-wise layers
+//! (`Linear → BatchNorm → ReLU`, batch norm folded into the linear map) run fused row by row,
+//! so each point's 64-channel intermediates stay in registers and L1 instead of being written
+//! and re-read as `N × 64` tensors; then eq. 5.4 (the GNN mean as one parallel sparse product,
+//! the two linear maps and the ReLU fused in place). Chunks of points run in parallel with
+//! rayon; every row is computed the same way whatever the thread count, so results are
+//! deterministic. Used only without autograd (plain, non-trainable weights on the CPU).
+
+use candle_core::Tensor;
+use rayon::prelude::*;
+
+use super::NeighbourIndex;
+use crate::{Error, Result};
+
+/// Output channels computed together (four 4-lane or two 8-lane vector registers).
+const TILE: usize = 16;
+
+/// Points per parallel task.
+const CHUNK: usize = 4096;
+
+/// An affine map `y = W x + b` packed for row-at-a-time products: `W` stored as tiles of
+/// [`TILE`] output channels, each tile `input × TILE` contiguous (zero-padded at the end).
+#[derive(Clone, Debug)]
+pub(crate) struct HostAffine {
+    packed: Vec<[f32; TILE]>,
+    bias: Vec<f32>,
+    input: usize,
+    output: usize,
+}
+
+impl HostAffine {
+    /// From `wt: (C_in, C_out)` (the transposed weight, contiguous) and `bias: (C_out)`
+    /// (`None`: zero).
+    pub(crate) fn from_transposed(wt: &Tensor, bias: Option<&Tensor>) -> Result<Self> {
+        let (input, output) = wt.dims2()?;
+        let values: Vec<f32> = wt.flatten_all()?.to_vec1()?;
+        let bias: Vec<f32> = match bias {
+            Some(b) => b.flatten_all()?.to_vec1()?,
+            None => vec![0.0; output],
+        };
+        if bias.len() != output {
+            return Err(Error::Invalid {
+                what: "host affine bias".into(),
+                reason: format!("{} values for {output} output channels", bias.len()),
+            });
+        }
+        let tiles = output.div_ceil(TILE);
+        let mut packed = vec![[0.0f32; TILE]; tiles * input];
+        for (i, row) in values.chunks_exact(output.max(1)).enumerate() {
+            for (o, &w) in row.iter().enumerate() {
+                if let Some(slot) = packed
+                    .get_mut((o / TILE) * input + i)
+                    .and_then(|t| t.get_mut(o % TILE))
+                {
+                    *slot = w;
+                }
+            }
+        }
+        Ok(Self {
+            packed,
+            bias,
+            input,
+            output,
+        })
+    }
+
+    /// `y = W x + b` for one row: `x: #C_in`, `y: #C_out` (overwritten).
+    #[inline]
+    fn apply(&self, x: &[f32], y: &mut [f32]) {
+        y.copy_from_slice(&self.bias);
+        self.accumulate(x, y);
+    }
+
+    /// `y += W x` for one row: `x: #C_in`, `y: #C_out`.
+    #[inline]
+    fn accumulate(&self, x: &[f32], y: &mut [f32]) {
+        for (tile, y_tile) in self
+            .packed
+            .chunks_exact(self.input.max(1))
+            .zip(y.chunks_mut(TILE))
+        {
+            let mut acc = [0.0f32; TILE];
+            for (w, &xi) in tile.iter().zip(x) {
+                for (a, &wk) in acc.iter_mut().zip(w) {
+                    *a += xi * wk;
+                }
+            }
+            for (yo, a) in y_tile.iter_mut().zip(acc) {
+                *yo += a;
+            }
+        }
+    }
+}
+
+/// The projector's evaluation-mode maps: point-wise layers, then eq. 5.4's `W_c` (+ b) and `W_n`.
+#[derive(Clone, Debug)]
+pub(crate) struct FusedProjector {
+    pub(crate) layers: Vec<HostAffine>,
+    pub(crate) centre: HostAffine,
+    pub(crate) neighbour: HostAffine,
+}
+
+impl FusedProjector {
+    /// Embeddings `#N × C` (row-major) of `points: #N×3` with their projector `graph`.
+    pub(crate) fn project(&self, points: &[[f32; 3]], graph: &NeighbourIndex) -> Result<Vec<f32>> {
+        let n = points.len();
+        let mut width = 3;
+        for (l, layer) in self.layers.iter().enumerate() {
+            if layer.input != width {
+                return Err(Error::Invalid {
+                    what: format!("projector layer {l}"),
+                    reason: format!("takes {} channels, gets {width}", layer.input),
+                });
+            }
+            width = layer.output;
+        }
+        let c = width;
+        let out = self.centre.output;
+        if self.centre.input != c || self.neighbour.input != c || self.neighbour.output != out {
+            return Err(Error::Invalid {
+                what: "projector GNN".into(),
+                reason: format!(
+                    "maps {}→{} and {}→{} channels after {c}-channel layers",
+                    self.centre.input, out, self.neighbour.input, self.neighbour.output
+                ),
+            });
+        }
+        if out != c {
+            return Err(Error::Invalid {
+                what: "projector GNN".into(),
+                reason: format!("fused inference needs C_out = C_in, got {out} ≠ {c}"),
+            });
+        }
+        if graph.len() != n {
+            return Err(Error::Invalid {
+                what: "projector graph".into(),
+                reason: format!("covers {} points, the cloud has {n}", graph.len()),
+            });
+        }
+        let scratch = self
+            .layers
+            .iter()
+            .map(|l| l.output)
+            .chain([3, out])
+            .max()
+            .unwrap_or(out);
+        // point-wise layers, fused per row
+        let mut features = vec![0.0f32; n * c];
+        features
+            .par_chunks_mut(CHUNK * c.max(1))
+            .zip(points.par_chunks(CHUNK))
+            .for_each_init(
+                || (vec![0.0f32; scratch], vec![0.0f32; scratch]),
+                |(a, b), (rows, pts)| {
+                    for (row, p) in rows.chunks_exact_mut(c.max(1)).zip(pts) {
+                        let mut width = 3;
+                        a[..3].copy_from_slice(p);
+                        for layer in &self.layers {
+                            let y = &mut b[..layer.output];
+                            layer.apply(&a[..width], y);
+                            for v in y.iter_mut() {
+                                *v = v.max(0.0);
+                            }
+                            width = layer.output;
+                            std::mem::swap(a, b);
+                        }
+                        row.copy_from_slice(&a[..c]);
+                    }
+                },
+            );
+        // eq. 5.4: the neighbour mean, then ReLU(W_c f + b + W_n mean) in place
+        let mut mean = graph.mean_matrix().mul_dense(&features, c)?;
+        mean.par_chunks_mut(CHUNK * c.max(1))
+            .zip(features.par_chunks(CHUNK * c.max(1)))
+            .for_each_init(
+                || vec![0.0f32; c],
+                |m, (rows, f_rows)| {
+                    for (row, f) in rows
+                        .chunks_exact_mut(c.max(1))
+                        .zip(f_rows.chunks_exact(c.max(1)))
+                    {
+                        m.copy_from_slice(row);
+                        self.centre.apply(f, row);
+                        self.neighbour.accumulate(m, row);
+                        for v in row.iter_mut() {
+                            *v = v.max(0.0);
+                        }
+                    }
+                },
+            );
+        Ok(mean)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::point_simplifier::PointSimplifier;
+    use candle_core::{DType, Device};
+    use meshgnn_graph::knn_graph;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    #[test]
+    fn packed_affine_equals_dense_product() {
+        // W (3×2) = [[1, 2], [3, 4], [5, 6]]ᵀ stored transposed (2, 3); b = (1, -1, 0.5)
+        let dev = Device::Cpu;
+        let wt = Tensor::new(&[[1.0f32, 3.0, 5.0], [2.0, 4.0, 6.0]], &dev).unwrap();
+        let b = Tensor::new(&[1.0f32, -1.0, 0.5], &dev).unwrap();
+        let affine = HostAffine::from_transposed(&wt, Some(&b)).unwrap();
+        let mut y = [0.0f32; 3];
+        affine.apply(&[2.0, -1.0], &mut y);
+        // (1·2 − 2 + 1, 3·2 − 4 − 1, 5·2 − 6 + 0.5)
+        assert_eq!(y, [1.0, 1.0, 4.5]);
+        affine.accumulate(&[1.0, 0.0], &mut y);
+        assert_eq!(y, [2.0, 4.0, 9.5]);
+    }
+
+    #[test]
+    fn fused_projector_equals_candle_projector_on_bundled_weights() {
+        let model = PointSimplifier::pretrained().unwrap();
+        let mut rng = StdRng::seed_from_u64(3);
+        let points: Vec<[f32; 3]> = (0..5000)
+            .map(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)))
+            .collect();
+        let graph =
+            NeighbourIndex::from_knn(&knn_graph(&points, 7).unwrap(), &Device::Cpu).unwrap();
+        let fused = model
+            .fused_projector(false)
+            .unwrap()
+            .expect("plain weights on the CPU take the fused path");
+        let got = fused.project(&points, &graph).unwrap();
+        let input =
+            Tensor::from_slice(points.as_flattened(), (points.len(), 3), &Device::Cpu).unwrap();
+        let want: Vec<f32> = model
+            .project(&input, &graph, false)
+            .unwrap()
+            .to_dtype(DType::F32)
+            .unwrap()
+            .flatten_all()
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        assert_eq!(got.len(), want.len());
+        let scale = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+            assert!((a - b).abs() <= 1e-5 * scale.max(1.0), "{i}: {a} vs {b}");
+        }
+        // training mode and trainable weights keep the candle path
+        assert!(model.fused_projector(true).unwrap().is_none());
+        let map = candle_nn::VarMap::new();
+        let vb = candle_nn::VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
+        let trainable = PointSimplifier::new(vb, &Default::default()).unwrap();
+        assert!(trainable.fused_projector(false).unwrap().is_none());
+    }
+
+    #[test]
+    fn fused_projector_rejects_a_graph_over_other_points() {
+        let model = PointSimplifier::pretrained().unwrap();
+        let fused = model.fused_projector(false).unwrap().unwrap();
+        let graph = NeighbourIndex::from_rows(&[vec![1], vec![0]], &Device::Cpu).unwrap();
+        assert!(fused.project(&[[0.0; 3]; 3], &graph).is_err());
+    }
+}
