@@ -12,15 +12,14 @@
 use std::time::Duration;
 
 use candle_core::Device;
-use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use meshgnn::geometry::TriMesh;
 use meshgnn::losses::losses::reconstruction_l1;
 use meshgnn_data::{HandSetConfig, HandTemplate};
-use meshgnn_models::MorphableModel;
 use meshgnn_models::spiral::{
     SpiralAutoencoderConfig, SpiralMorphableModel, VertexNormalization, mesh_batch,
 };
+use meshgnn_models::{Adam, AdamConfig, MorphableModel, sorted_vars};
 
 const BATCH: usize = 16;
 
@@ -43,14 +42,7 @@ fn spiral_autoencoder(c: &mut Criterion) {
     let x = mesh_batch(&hands, &device).unwrap();
     let xn = model.normalization().normalize(&x).unwrap();
     let z = model.encode(&x).unwrap();
-    let mut optimizer = AdamW::new(
-        model.vars().all_vars(),
-        ParamsAdamW {
-            weight_decay: 0.0,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut optimizer = Adam::new(sorted_vars(model.vars()), AdamConfig::default()).unwrap();
 
     let mut group = c.benchmark_group("spiral_autoencoder_11k");
     group

@@ -13,10 +13,8 @@
 use rayon::prelude::*;
 
 use crate::kd_tree::KdTree;
+use crate::knn_index::KnnIndex;
 use crate::{Error, Result};
-
-/// Leaf size of the kd-tree for k-NN queries (a common choice for k ≈ 7-20; not tuned).
-const LEAF_SIZE: usize = 16;
 
 /// The result of a k-NN query: `k` neighbours per query point.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -87,15 +85,13 @@ pub fn knn_graph(points: &[[f32; 3]], k: usize) -> Result<Neighbours> {
             message: format!("must be in 1..{} for {} points", points.len(), points.len()),
         });
     }
-    check_u32_len(points.len(), "points")?;
-    check_finite(points, "point")?;
-    let tree = KdTree::new(points, LEAF_SIZE);
-    Ok(run_queries(&tree, points, k, true))
+    KnnIndex::new(points)?.graph(k)
 }
 
 /// For each of `queries: #Q×3`, its `k` nearest of `points: #P×3` (a query coinciding with a
 /// point finds it at distance 0). Used by the Chamfer distances (eq. 5.6-5.7) and AttRef
-/// (eq. 5.5). O((P + Q) log P) expected, parallel over queries.
+/// (eq. 5.5). O((P + Q) log P) expected, parallel over queries. Build a [`KnnIndex`] instead
+/// to query the same points several times.
 ///
 /// Errors when `k == 0`, `k > #P`, or a coordinate is NaN/infinite.
 ///
@@ -117,11 +113,7 @@ pub fn knn_query(queries: &[[f32; 3]], points: &[[f32; 3]], k: usize) -> Result<
             ),
         });
     }
-    check_u32_len(points.len(), "points")?;
-    check_finite(points, "point")?;
-    check_finite(queries, "query")?;
-    let tree = KdTree::new(points, LEAF_SIZE);
-    Ok(run_queries(&tree, queries, k, false))
+    KnnIndex::new(points)?.query(queries, k)
 }
 
 /// Runs one k-NN query per row of `queries`, in parallel; `exclude_self` skips index `i` for
@@ -225,6 +217,25 @@ mod tests {
                 squared_distance(&pts[j as usize], q)
             );
         }
+    }
+
+    #[test]
+    fn index_graph_and_query_equal_the_free_functions() {
+        let pts = random_points(6, 600, true);
+        let queries = random_points(7, 150, false);
+        let index = KnnIndex::new(&pts).unwrap();
+        for k in [1, 7, 15] {
+            let g = index.graph(k).unwrap();
+            assert_eq!(g, knn_graph(&pts, k).unwrap(), "graph k {k}");
+            assert_eq!(g.indices, brute(&pts, &pts, k, true), "graph k {k}");
+            let q = index.query(&queries, k).unwrap();
+            assert_eq!(q, knn_query(&queries, &pts, k).unwrap(), "query k {k}");
+            assert_eq!(q.indices, brute(&queries, &pts, k, false), "query k {k}");
+        }
+        assert_eq!(index.len(), 600);
+        assert!(index.graph(600).is_err());
+        assert!(index.query(&queries, 601).is_err());
+        assert!(index.query(&[[f32::NAN, 0.0, 0.0]], 1).is_err());
     }
 
     #[test]

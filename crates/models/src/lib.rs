@@ -10,6 +10,7 @@
 //! `forward`.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+mod adam;
 mod error;
 mod latent_gaussian;
 mod latent_interpolation;
@@ -25,6 +26,7 @@ mod tensor_file;
 pub mod point_simplifier;
 pub mod spiral;
 
+pub use adam::{Adam, AdamConfig, sorted_vars};
 pub use error::{Error, Result};
 pub use latent_gaussian::LatentGaussian;
 pub use latent_interpolation::interpolate_shapes;

@@ -18,11 +18,11 @@
 //! - Deterministic: the scan subset comes from a seeded sampler, everything else is fixed.
 
 use candle_core::{DType, Device, Tensor, Var};
-use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use meshgnn_geometry::{TriMesh, vertex_normals};
 use meshgnn_graph::{knn_query, uniform_sampling};
 use meshgnn_losses::losses::chamfer_loss;
 
+use crate::adam::{Adam, AdamConfig};
 use crate::latent_gaussian::LatentGaussian;
 use crate::morphable_evaluation::rms_radius;
 use crate::morphable_model::MorphableModel;
@@ -392,15 +392,18 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     let q = Var::from_tensor(&Tensor::new(&[1f32, 0.0, 0.0, 0.0], &dev)?)?;
     let log_s = Var::from_tensor(&Tensor::zeros(1, DType::F32, &dev)?)?;
     let tau = Var::from_tensor(&Tensor::zeros((1, 3), DType::F32, &dev)?)?;
-    let mut vars = vec![z.clone(), q.clone(), tau.clone()];
+    let mut vars = vec![
+        ("latent".to_string(), z.clone()),
+        ("rotation".to_string(), q.clone()),
+        ("translation".to_string(), tau.clone()),
+    ];
     if options.fit_scale {
-        vars.push(log_s.clone());
+        vars.push(("log_scale".to_string(), log_s.clone()));
     }
-    let mut opt = AdamW::new(
+    let mut opt = Adam::new(
         vars,
-        ParamsAdamW {
-            lr: options.learning_rate,
-            weight_decay: 0.0,
+        AdamConfig {
+            learning_rate: options.learning_rate,
             ..Default::default()
         },
     )?;

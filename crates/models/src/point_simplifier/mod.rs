@@ -26,7 +26,7 @@ pub use point_simplifier::{
     PointSimplifier, PointSimplifierConfig, SimplifierOutput, StageTimings,
 };
 pub use pretrained::PRETRAINED_WEIGHTS;
-pub use refinement_graph::{RefinementGraph, refinement_graph};
+pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_indexed};
 pub use simplifier_loss::{CURVATURE_LOSS_WEIGHT, SimplifierLoss, simplifier_loss};
 pub use simplify::{Simplification, SimplifyOptions};
 pub use training::{

@@ -9,8 +9,10 @@
 //!   point's own index and weight 0. A point with no neighbour (isolated vertex) gets a zero
 //!   mean, i.e. `f'_i = W_c f_i`.
 
+use std::sync::Arc;
+
 use candle_core::{Device, Tensor};
-use meshgnn_graph::{CsrMatrix, Neighbours};
+use meshgnn_graph::{CsrMatrix, KnnIndex, Neighbours};
 use rayon::prelude::*;
 
 use crate::{Error, Result};
@@ -23,6 +25,9 @@ pub struct NeighbourIndex {
     mean: CsrMatrix,
     len: usize,
     width: usize,
+    /// The kd-tree the k-NN rows came from, when built by [`NeighbourIndex::from_knn_index`]:
+    /// reused for AttRef's eq. 5.5 queries over the same points.
+    knn_index: Option<Arc<KnnIndex>>,
 }
 
 impl NeighbourIndex {
@@ -89,6 +94,33 @@ impl NeighbourIndex {
         Self::from_flat(neighbours.indices.clone(), vec![w; n * k], n, k, device)
     }
 
+    /// From a prebuilt `index` over the cloud's `#N×3` points: the eq. 5.4 k-NN graph
+    /// (`index.graph(k)`, weights `1/k`), keeping the index so that
+    /// [`super::PointSimplifier::forward`] reuses it for AttRef instead of building a second
+    /// kd-tree over the same points. Errors when `k == 0` or `k >= N`.
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_graph::KnnIndex;
+    /// use meshgnn_models::point_simplifier::NeighbourIndex;
+    /// let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
+    /// let g = NeighbourIndex::from_knn_index(KnnIndex::new(&pts)?, 1, &Device::Cpu)?;
+    /// let idx: Vec<u32> = g.indices().to_vec1()?;
+    /// assert_eq!(idx, vec![1, 0, 1]);
+    /// assert_eq!(g.knn_index().map(KnnIndex::len), Some(3));
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn from_knn_index(index: KnnIndex, k: usize, device: &Device) -> Result<Self> {
+        let mut graph = Self::from_knn(&index.graph(k)?, device)?;
+        graph.knn_index = Some(Arc::new(index));
+        Ok(graph)
+    }
+
+    /// The k-NN index kept by [`NeighbourIndex::from_knn_index`] (`None` otherwise).
+    pub fn knn_index(&self) -> Option<&KnnIndex> {
+        self.knn_index.as_deref()
+    }
+
     /// From a mesh adjacency `adjacency: #V×#V` (e.g. [`meshgnn_graph::vertex_adjacency`]);
     /// the stored columns of row `i` are its neighbours (values ignored), padded to the largest
     /// degree as described in the module docs.
@@ -131,6 +163,7 @@ impl NeighbourIndex {
             mean,
             len,
             width,
+            knn_index: None,
         })
     }
 

@@ -20,7 +20,7 @@ use candle_nn::VarBuilder;
 use super::fused_projector::FusedProjector;
 use super::{
     AttentionRefinement, LatentSamplingOptions, MeanAggregationGnn, NeighbourIndex, PointMlp,
-    latent_farthest_point_sampling, refinement_graph,
+    latent_farthest_point_sampling, refinement_graph, refinement_graph_indexed,
 };
 use crate::{Error, Result};
 
@@ -189,8 +189,9 @@ impl PointSimplifier {
 
     /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
     /// keeps `target` points (`1 ≤ target ≤ N`) chosen by latent FPS (`selection`, `seed`) and
-    /// refined by AttRef. Errors on a bad target, a graph over a different N or non-finite
-    /// points.
+    /// refined by AttRef. A `graph` built by [`NeighbourIndex::from_knn_index`] over these
+    /// `points` lends its kd-tree to AttRef's queries. Errors on a bad target, a graph over a
+    /// different N or non-finite points.
     pub fn forward(
         &self,
         points: &[[f32; 3]],
@@ -242,12 +243,21 @@ impl PointSimplifier {
             seed,
         )?;
         let t2 = Instant::now();
-        let rgraph = refinement_graph(
-            points,
-            &indices,
-            self.config.refine_neighbours,
-            &self.device,
-        )?;
+        let rgraph = match graph.knn_index() {
+            Some(index) => refinement_graph_indexed(
+                index,
+                points,
+                &indices,
+                self.config.refine_neighbours,
+                &self.device,
+            )?,
+            None => refinement_graph(
+                points,
+                &indices,
+                self.config.refine_neighbours,
+                &self.device,
+            )?,
+        };
         let displacement = match embeddings.filter(Tensor::track_op) {
             Some(embeddings) => self.refine.forward(&embeddings, &rgraph)?,
             None => self

@@ -14,7 +14,7 @@
 //!   of learnable layers.
 
 use candle_core::{Device, Tensor};
-use meshgnn_graph::knn_query;
+use meshgnn_graph::KnnIndex;
 use rayon::prelude::*;
 
 use crate::{Error, Result};
@@ -54,7 +54,37 @@ pub fn refinement_graph(
     k: usize,
     device: &Device,
 ) -> Result<RefinementGraph> {
+    refinement_graph_indexed(&KnnIndex::new(points)?, points, centres, k, device)
+}
+
+/// [`refinement_graph`] with a prebuilt `index` over the same `points: #N×3` (e.g. the one
+/// that built the projector's eq. 5.4 graph), so the kd-tree is built once per cloud.
+/// Errors when the index covers a different number of points.
+///
+/// ```
+/// use candle_core::Device;
+/// use meshgnn_graph::KnnIndex;
+/// use meshgnn_models::point_simplifier::refinement_graph_indexed;
+/// let pts = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [9.0, 9.0, 9.0]];
+/// let g = refinement_graph_indexed(&KnnIndex::new(&pts)?, &pts, &[3], 2, &Device::Cpu)?;
+/// let nb: Vec<u32> = g.neighbours.to_vec1()?;
+/// assert_eq!(nb, vec![3, 1]); // itself, then the nearest (|(7, 9, 9)|² < |(9, 7, 9)|²)
+/// # Ok::<(), meshgnn_models::Error>(())
+/// ```
+pub fn refinement_graph_indexed(
+    index: &KnnIndex,
+    points: &[[f32; 3]],
+    centres: &[u32],
+    k: usize,
+    device: &Device,
+) -> Result<RefinementGraph> {
     let n = points.len();
+    if index.len() != n {
+        return Err(Error::Invalid {
+            what: "k-NN index".into(),
+            reason: format!("covers {} points, the cloud has {n}", index.len()),
+        });
+    }
     if let Some(&bad) = centres.iter().find(|&&c| c as usize >= n) {
         return Err(Error::Invalid {
             what: format!("centre {bad}"),
@@ -67,7 +97,7 @@ pub fn refinement_graph(
         .iter()
         .filter_map(|&c| points.get(c as usize).copied())
         .collect();
-    let nn = knn_query(&centre_points, points, k)?;
+    let nn = index.query(&centre_points, k)?;
     let mut offsets = vec![0f32; m * k * 3];
     let mut scales = vec![0f32; m];
     offsets
@@ -120,5 +150,28 @@ mod tests {
         let nb: Vec<u32> = g.neighbours.to_vec1().unwrap();
         assert_eq!(nb, vec![0, 1, 2, 1]);
         assert!(refinement_graph(&pts, &[3], 2, &Device::Cpu).is_err());
+    }
+
+    #[test]
+    fn indexed_graph_equals_the_self_built_one() {
+        let pts: Vec<[f32; 3]> = (0..300u32)
+            .map(|i| {
+                let t = i as f32 * 0.37;
+                [t.sin(), (1.3 * t).cos(), (i % 7) as f32 * 0.1]
+            })
+            .collect();
+        let centres = [0, 17, 42, 299];
+        let index = KnnIndex::new(&pts).unwrap();
+        let a = refinement_graph(&pts, &centres, 15, &Device::Cpu).unwrap();
+        let b = refinement_graph_indexed(&index, &pts, &centres, 15, &Device::Cpu).unwrap();
+        let nb = |g: &RefinementGraph| g.neighbours.to_vec1::<u32>().unwrap();
+        let off = |g: &RefinementGraph| g.offsets.to_vec2::<f32>().unwrap();
+        let sc = |g: &RefinementGraph| g.scales.to_vec2::<f32>().unwrap();
+        assert_eq!(nb(&a), nb(&b));
+        assert_eq!(off(&a), off(&b));
+        assert_eq!(sc(&a), sc(&b));
+        assert_eq!(nb(&a)[0], 0);
+        let other = KnnIndex::new(&pts[..200]).unwrap();
+        assert!(refinement_graph_indexed(&other, &pts, &centres, 15, &Device::Cpu).is_err());
     }
 }

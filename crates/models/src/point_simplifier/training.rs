@@ -8,14 +8,14 @@
 //! - Initialisation: every linear weight and bias `U(−1/√fan_in, 1/√fan_in)` (PyTorch's
 //!   default), batch-norm scale 1, shift 0; drawn from `StdRng::seed_from_u64(seed)` in name
 //!   order.
-//! - Adam: β = (0.9, 0.999), ε = 1e-8, no weight decay; batch-norm running statistics are
+//! - Adam ([`crate::Adam`]): β = (0.9, 0.999), ε = 1e-8, no weight decay; batch-norm running statistics are
 //!   state, not parameters.
 //! - Step `s` draws its ratio and FPS seed from `StdRng::seed_from_u64(seed ^ s·0xD1B5_4A32_D192_ED03)`;
 //!   epoch `e` shuffles the clouds with `StdRng::seed_from_u64(seed + e)`.
 
 use std::path::Path;
 
-use candle_core::{DType, Device, Tensor, Var};
+use candle_core::{DType, Device, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::{curvature_features, unit_sphere_normalization};
 use meshgnn_graph::knn_graph;
@@ -28,11 +28,8 @@ use super::{
     CheckpointState, LatentSamplingOptions, NeighbourIndex, PointSimplifier, PointSimplifierConfig,
     read_checkpoint, simplifier_loss, write_checkpoint,
 };
-use crate::{Error, Result};
-
-const BETA1: f64 = 0.9;
-const BETA2: f64 = 0.999;
-const EPSILON: f64 = 1e-8;
+use crate::adam::sorted_vars;
+use crate::{Adam, AdamConfig, Error, Result};
 
 /// Training hyper-parameters; defaults follow ch. 5.6 except the epoch count (the thesis trains
 /// 150 epochs on its datasets; our default run is sized for a 2-core machine).
@@ -148,10 +145,7 @@ pub struct Trainer {
     config: TrainingConfig,
     varmap: VarMap,
     model: PointSimplifier,
-    names: Vec<String>,
-    vars: Vec<Var>,
-    first_moments: Vec<Tensor>,
-    second_moments: Vec<Tensor>,
+    optimizer: Adam,
     epoch: usize,
     step: u64,
     last_loss: f64,
@@ -238,35 +232,26 @@ impl Trainer {
         last_loss: f64,
         moments: Option<&std::collections::HashMap<String, Tensor>>,
     ) -> Result<Self> {
-        let (names, vars): (Vec<String>, Vec<Var>) = sorted_vars(&varmap)
+        let params = sorted_vars(&varmap)
             .into_iter()
             .filter(|(n, _)| !n.contains("running_"))
-            .unzip();
-        let moment = |kind: &str, name: &str, var: &Var| -> Result<Tensor> {
-            match moments.and_then(|m| m.get(&format!("{OPTIMIZER_PREFIX}{kind}.{name}"))) {
-                Some(t) => Ok(t.clone()),
-                None => Ok(Tensor::zeros(var.dims(), DType::F32, &Device::Cpu)?),
-            }
-        };
-        let first_moments = names
-            .iter()
-            .zip(&vars)
-            .map(|(n, v)| moment("m", n, v))
-            .collect::<Result<Vec<_>>>()?;
-        let second_moments = names
-            .iter()
-            .zip(&vars)
-            .map(|(n, v)| moment("v", n, v))
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
+        let mut optimizer = Adam::new(
+            params,
+            AdamConfig {
+                learning_rate: config.learning_rate,
+                ..Default::default()
+            },
+        )?;
+        if let Some(tensors) = moments {
+            optimizer.restore(tensors, OPTIMIZER_PREFIX, step)?;
+        }
         Ok(Self {
             model_config,
             config,
             varmap,
             model,
-            names,
-            vars,
-            first_moments,
-            second_moments,
+            optimizer,
             epoch,
             step,
             last_loss,
@@ -347,31 +332,9 @@ impl Trainer {
                 reason: format!("is {value}; lower the learning rate"),
             });
         }
-        let grads = loss.backward()?;
+        self.optimizer.set_learning_rate(self.learning_rate());
+        self.optimizer.backward_step(&loss)?;
         self.step += 1;
-        let t = self.step as i32;
-        let lr = self.learning_rate();
-        let c1 = 1.0 - BETA1.powi(t);
-        let c2 = 1.0 - BETA2.powi(t);
-        for ((var, m), v) in self
-            .vars
-            .iter()
-            .zip(self.first_moments.iter_mut())
-            .zip(self.second_moments.iter_mut())
-        {
-            let Some(g) = grads.get(var.as_tensor()) else {
-                continue;
-            };
-            *m = m.affine(BETA1, 0.0)?.add(&g.affine(1.0 - BETA1, 0.0)?)?;
-            *v = v
-                .affine(BETA2, 0.0)?
-                .add(&g.sqr()?.affine(1.0 - BETA2, 0.0)?)?;
-            let update = m
-                .affine(1.0 / c1, 0.0)?
-                .div(&v.affine(1.0 / c2, 0.0)?.sqrt()?.affine(1.0, EPSILON)?)?
-                .affine(lr, 0.0)?;
-            var.set(&var.as_detached_tensor().sub(&update)?)?;
-        }
         Ok(value)
     }
 
@@ -415,11 +378,7 @@ impl Trainer {
     /// Writes a resumable checkpoint (weights, Adam moments, config, epoch, step, seed, loss).
     pub fn save(&self, path: &Path) -> Result<()> {
         let mut tensors = self.weights()?;
-        for (kind, moments) in [("m", &self.first_moments), ("v", &self.second_moments)] {
-            for (name, t) in self.names.iter().zip(moments) {
-                tensors.push((format!("{OPTIMIZER_PREFIX}{kind}.{name}"), t.clone()));
-            }
-        }
+        tensors.extend(self.optimizer.state_tensors(OPTIMIZER_PREFIX));
         write_checkpoint(path, &tensors, &self.model_config, Some(&self.state()))
     }
 
@@ -449,17 +408,6 @@ impl Trainer {
             .map(|(n, v)| (n, v.as_detached_tensor()))
             .collect())
     }
-}
-
-/// The VarMap's variables sorted by name (a deterministic order).
-fn sorted_vars(varmap: &VarMap) -> Vec<(String, Var)> {
-    let data = match varmap.data().lock() {
-        Ok(d) => d,
-        Err(poisoned) => poisoned.into_inner(),
-    };
-    let mut all: Vec<(String, Var)> = data.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-    all.sort_by(|a, b| a.0.cmp(&b.0));
-    all
 }
 
 fn check_config(c: &TrainingConfig) -> Result<()> {
@@ -519,15 +467,16 @@ mod tests {
         let trainer = Trainer::new(&mc, &tc).unwrap();
         let loss = trainer.loss(&s, 40, 1, true).unwrap();
         let grads = loss.backward().unwrap();
+        let vars = sorted_vars(&trainer.varmap);
         for name in [
             "projector.mlp.0.linear.weight",
             "projector.gnn.neighbour.weight",
             "refine.query.weight",
             "refine.gamma.1.weight",
         ] {
-            let i = trainer.names.iter().position(|n| n == name).unwrap();
+            let var = &vars.iter().find(|(n, _)| n == name).unwrap().1;
             let g = grads
-                .get(trainer.vars[i].as_tensor())
+                .get(var.as_tensor())
                 .unwrap_or_else(|| panic!("no gradient for {name}"));
             let norm = g
                 .sqr()

@@ -8,25 +8,31 @@
 //! # Resuming
 //! With `resume` and an existing checkpoint, training continues after the last completed
 //! epoch with the checkpoint's weights, normalisation, learning rate and data order (the
-//! shuffle of epoch `e` depends only on `(seed, e)`). candle's Adam does not expose its moment
-//! estimates, so they restart from zero on resume; the result is therefore close to, not bit
-//! identical with, an uninterrupted run.
+//! shuffle of epoch `e` depends only on `(seed, e)`) and Adam's moment estimates and step
+//! count ([`crate::Adam`], stored in the checkpoint as the tensors `optimizer.{m,v}.<name>`
+//! beside the model's), so the result is bit-identical with an uninterrupted run. A checkpoint
+//! written before the moments were stored still resumes, with the moments restarted at zero.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
+use std::collections::HashMap;
+
 use candle_core::{Device, Tensor};
-use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use meshgnn_geometry::TriMesh;
 use meshgnn_losses::losses::reconstruction_l1;
 use rand::{SeedableRng, rngs::StdRng, seq::SliceRandom};
 use serde::{Deserialize, Serialize};
 
+use crate::adam::sorted_vars;
 use crate::spiral::vertex_normalization::check_meshes;
 use crate::spiral::{
     SpiralAutoencoderConfig, SpiralMorphableModel, VertexNormalization, mesh_batch,
 };
-use crate::{Error, MorphableModel, Result};
+use crate::{Adam, AdamConfig, Error, MorphableModel, Result};
+
+/// Prefix of the optimiser-state tensors in a training checkpoint (ignored by model loading).
+const OPTIMIZER_PREFIX: &str = "optimizer.";
 
 /// Hyper-parameters of [`train_spiral_model`]; update with `..Default::default()`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -155,7 +161,7 @@ pub fn train_spiral_model(
             ),
         });
     }
-    let (model, state) = start(template, model_config, train, config, device)?;
+    let (model, state, saved_optimizer) = start(template, model_config, train, config, device)?;
     let normalization = model.normalization().clone();
     let train_data = normalization.normalize(&mesh_batch(train, device)?)?;
     let validation_data = if validation.is_empty() {
@@ -163,14 +169,14 @@ pub fn train_spiral_model(
     } else {
         Some(normalization.normalize(&mesh_batch(validation, device)?)?)
     };
-    let mut optimizer = AdamW::new(
-        model.vars().all_vars(),
-        ParamsAdamW {
-            lr: config.learning_rate,
-            weight_decay: 0.0,
+    let mut optimizer = Adam::new(
+        sorted_vars(model.vars()),
+        AdamConfig {
+            learning_rate: config.learning_rate,
             ..Default::default()
         },
     )?;
+    optimizer.restore(&saved_optimizer, OPTIMIZER_PREFIX, state.step as u64)?;
     let steps_per_epoch = train.len().div_ceil(config.batch_size);
     let mut step = state.step;
     let mut history = Vec::new();
@@ -233,7 +239,7 @@ pub fn train_spiral_model(
                 what: "training state".into(),
                 reason: e.to_string(),
             })?;
-            model.save_with_metadata(path, &[("training", json)])?;
+            save_checkpoint(&model, &optimizer, path, json)?;
         }
         progress(&report);
         history.push(report);
@@ -245,14 +251,40 @@ pub fn train_spiral_model(
     })
 }
 
-/// A fresh model, or the checkpoint's model and state when resuming.
+/// Writes the model file with the `training` metadata `state_json` and the optimiser state
+/// added as `optimizer.{m,v}.<name>` tensors, atomically.
+fn save_checkpoint(
+    model: &SpiralMorphableModel,
+    optimizer: &Adam,
+    path: &std::path::Path,
+    state_json: String,
+) -> Result<()> {
+    let bad = |reason: String| Error::Checkpoint {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let bytes = model.to_bytes(&[("training", state_json)])?;
+    let (_, header) = safetensors::SafeTensors::read_metadata(&bytes)
+        .map_err(|e| bad(format!("cannot re-read the model bytes: {e}")))?;
+    let metadata = header.metadata().clone();
+    let mut tensors = candle_core::safetensors::load_buffer(&bytes, &Device::Cpu)?;
+    for (name, t) in optimizer.state_tensors(OPTIMIZER_PREFIX) {
+        tensors.insert(name, t.to_device(&Device::Cpu)?);
+    }
+    let bytes = safetensors::tensor::serialize(tensors, metadata)
+        .map_err(|e| bad(format!("cannot serialise: {e}")))?;
+    meshgnn_geometry::atomic_write(path, &bytes)?;
+    Ok(())
+}
+
+/// A fresh model, or the checkpoint's model, state and optimiser tensors when resuming.
 fn start(
     template: &TriMesh,
     model_config: &SpiralAutoencoderConfig,
     train: &[Vec<[f32; 3]>],
     config: &TrainConfig,
     device: &Device,
-) -> Result<(SpiralMorphableModel, TrainingState)> {
+) -> Result<(SpiralMorphableModel, TrainingState, HashMap<String, Tensor>)> {
     if let (true, Some(path)) = (config.resume, &config.checkpoint)
         && path.exists()
     {
@@ -261,6 +293,11 @@ fn start(
             path: path.clone(),
             reason,
         };
+        let optimizer: HashMap<String, Tensor> = candle_core::safetensors::load(path, device)
+            .map_err(|e| bad(format!("unreadable tensors: {e}")))?
+            .into_iter()
+            .filter(|(k, _)| k.starts_with(OPTIMIZER_PREFIX))
+            .collect();
         if model.config() != model_config {
             return Err(bad(format!(
                 "was trained with {:?}, not the requested {model_config:?}",
@@ -276,7 +313,7 @@ fn start(
             .and_then(|s| {
                 serde_json::from_str(s).map_err(|e| bad(format!("bad `training`: {e}")))
             })?;
-        return Ok((model, state));
+        return Ok((model, state, optimizer));
     }
     let normalization = VertexNormalization::fit(train, device)?;
     let model =
@@ -288,6 +325,7 @@ fn start(
             step: 0,
             seed: config.seed,
         },
+        HashMap::new(),
     ))
 }
 
@@ -451,6 +489,36 @@ mod tests {
         });
         assert_eq!(resumed.history.len(), 1);
         assert_eq!((resumed.history[0].epoch, resumed.history[0].step), (2, 6));
+        // ... and ends bit-identical with an uninterrupted three-epoch run (Adam's moments and
+        // step count come back from the checkpoint).
+        let straight = run(&TrainConfig {
+            epochs: 3,
+            ..base.clone()
+        });
+        assert_eq!(weights(&resumed.model), weights(&straight.model));
+        assert_eq!(resumed.history[0], straight.history[2]);
+        // The checkpoint still loads as a plain model, and a checkpoint without optimiser
+        // tensors (written before they were stored) still resumes, not bit-exactly.
+        let (plain, _) = SpiralMorphableModel::load_with_metadata(&path, &Device::Cpu).unwrap();
+        assert_eq!(weights(&plain), weights(&resumed.model));
+        let old = dir.path().join("old.safetensors");
+        let state = serde_json::to_string(&TrainingState {
+            epochs_completed: 2,
+            step: 4,
+            seed: 5,
+        })
+        .unwrap();
+        saved
+            .save_with_metadata(&old, &[("training", state)])
+            .unwrap();
+        let from_old = run(&TrainConfig {
+            epochs: 3,
+            checkpoint: Some(old),
+            resume: true,
+            ..base.clone()
+        });
+        assert_eq!(from_old.history[0].step, 6);
+        assert_ne!(weights(&from_old.model), weights(&straight.model));
         // A different architecture cannot resume from it.
         let other = train_spiral_model(
             &sphere,
