@@ -12,7 +12,6 @@ mod bench;
 mod eval;
 mod input;
 mod method;
-mod qem_vertices;
 mod simplify;
 mod train;
 

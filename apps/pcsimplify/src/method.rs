@@ -15,7 +15,7 @@ use meshgnn_losses::metrics::EVALUATION_CURVATURE_NEIGHBOURS;
 use meshgnn_models::point_simplifier::{PointSimplifier, SimplifyOptions};
 
 use crate::input::Input;
-use crate::qem_vertices::qem_vertices;
+use meshgnn_graph::qem_vertices;
 
 /// A point-selection method.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

@@ -1,4 +1,7 @@
-//! Small `f64` vector and rotation helpers shared by the generators (private to the crate).
+//! Small `f64` vector and rotation helpers shared by the generators (private to the crate);
+//! the basic products come from `meshgnn_geometry::vec3`.
+
+pub(crate) use meshgnn_geometry::vec3::{cross, dot, norm, sub};
 
 /// A 3-vector.
 pub(crate) type V3 = [f64; 3];
@@ -11,38 +14,10 @@ pub(crate) fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-/// `a − b`.
-#[inline]
-pub(crate) fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 /// `s·a`.
 #[inline]
 pub(crate) fn scale(a: V3, s: f64) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
-}
-
-/// `a · b`.
-#[inline]
-pub(crate) fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `a × b`.
-#[inline]
-pub(crate) fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `|a|`.
-#[inline]
-pub(crate) fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
 }
 
 /// `a / |a|`, or `a` unchanged when `|a| = 0`.

@@ -18,7 +18,7 @@ mod io;
 mod point_cloud;
 mod primitives;
 mod tri_mesh;
-mod vec3;
+pub mod vec3;
 
 mod boundary_loops;
 mod connected_components;

@@ -1,20 +1,21 @@
-//! Small `f64` vector helpers shared by the operators (private to the crate).
+//! Small `f64` vector helpers, shared by the operators of every meshgnn crate so quadrics,
+//! predicates and normals use one definition.
 
 /// `p` widened to `f64`.
 #[inline]
-pub(crate) fn to_f64(p: [f32; 3]) -> [f64; 3] {
+pub fn to_f64(p: [f32; 3]) -> [f64; 3] {
     [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
 }
 
 /// `a − b`.
 #[inline]
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// `a × b`.
 #[inline]
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -24,19 +25,19 @@ pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 
 /// `a · b`.
 #[inline]
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `|a|`.
 #[inline]
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
+pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
 /// `a / |a|` as `f32`, or zero when `|a| = 0`.
 #[inline]
-pub(crate) fn unit_f32(a: [f64; 3]) -> [f32; 3] {
+pub fn unit_f32(a: [f64; 3]) -> [f32; 3] {
     let n = norm(a);
     if n > 0.0 && n.is_finite() {
         [(a[0] / n) as f32, (a[1] / n) as f32, (a[2] / n) as f32]
@@ -47,7 +48,7 @@ pub(crate) fn unit_f32(a: [f64; 3]) -> [f32; 3] {
 
 /// The doubled-area vector `(b − a) × (c − a)` of a triangle, in `f64`.
 #[inline]
-pub(crate) fn triangle_cross(corners: [[f32; 3]; 3]) -> [f64; 3] {
+pub fn triangle_cross(corners: [[f32; 3]; 3]) -> [f64; 3] {
     let [a, b, c] = corners.map(to_f64);
     cross(sub(b, a), sub(c, a))
 }

@@ -16,6 +16,7 @@ mod qem_collapse_checks;
 mod qem_collapser;
 mod qem_decimation;
 mod qem_edge_placement;
+mod qem_vertices;
 mod quadric;
 mod weld_by_position;
 
@@ -54,6 +55,7 @@ pub use k_ring::{k_disk, k_rings};
 pub use knn_graph::{Neighbours, knn_graph, knn_query};
 pub use knn_index::KnnIndex;
 pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};
+pub use qem_vertices::{QemVertices, qem_vertices};
 pub use radius_graph::{RadiusNeighbours, radius_graph};
 pub use spiral::{Spirals, spiral_sequences};
 pub use top_curvature_sampling::top_curvature_sampling;

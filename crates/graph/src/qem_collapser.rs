@@ -11,6 +11,7 @@
 //! and vertices are marked in place ([`DEAD`]), not in side arrays.
 
 use meshgnn_geometry::TriMesh;
+use meshgnn_geometry::vec3::{cross, dot, sub};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
@@ -71,25 +72,6 @@ pub(crate) struct Placement {
     pub survivor: u32,
     /// Parameter of `position` along `a → b`, for attribute interpolation.
     pub t: f64,
-}
-
-#[inline]
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline]
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[inline]

@@ -6,31 +6,14 @@
 //! is reported as `0` (coplanar), so every caller sees a consistent sign: the three-way answer
 //! is never a rounding artefact. Points within the bound of a plane count as on it.
 
+use meshgnn_geometry::vec3::sub;
+
 /// Relative error bound of the `f64` determinant (Shewchuk's `o3derrboundA`).
 const ERRBOUND: f64 = (7.0 + 56.0 * f64::EPSILON) * f64::EPSILON;
 
 /// Converts an `f32` point to `f64`.
 pub(crate) fn widen(p: &[f32; 3]) -> [f64; 3] {
     p.map(f64::from)
-}
-
-/// `a − b`.
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `a × b`.
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `a · b`.
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Sign of the volume of the tetrahedron `(a, b, c, d)`: `+1` when `d` lies below the plane of

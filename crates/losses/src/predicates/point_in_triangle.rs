@@ -1,6 +1,7 @@
 //! Is a point inside a triangle, by areas? The overlap test of thesis eq. 6.13.
 
-use crate::predicates::orient3d::{cross, dot, sub, widen};
+use crate::predicates::orient3d::widen;
+use meshgnn_geometry::vec3::{cross, dot, sub};
 
 /// Tolerances of [`point_in_triangle`], relative to the triangle's size.
 #[derive(Clone, Copy, Debug, PartialEq)]

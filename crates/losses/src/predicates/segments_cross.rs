@@ -1,6 +1,7 @@
 //! Do two segments cross in 3-d? The edge-crossing test of thesis eq. 6.12.
 
-use crate::predicates::orient3d::{cross, orient3d, sub, widen};
+use crate::predicates::orient3d::{orient3d, widen};
+use meshgnn_geometry::vec3::{cross, sub};
 
 /// 2-d orientation of `(a, b, c)` after dropping coordinate `drop`.
 fn orient2d_dropping(a: [f64; 3], b: [f64; 3], c: [f64; 3], drop: usize) -> i8 {

@@ -2,9 +2,10 @@
 //! every surviving vertex kept at an original position until exactly the requested number of
 //! vertices is left, and report which input vertices those are.
 
-use anyhow::{Result, bail};
 use meshgnn_geometry::{TriMesh, boundary_loops};
-use meshgnn_graph::{DecimationOptions, Target, decimate};
+
+use crate::error::{Error, Result};
+use crate::qem_decimation::{DecimationOptions, Target, decimate};
 
 /// Passes before giving up (each removes at least half of the remaining excess).
 const MAX_PASSES: usize = 64;
@@ -18,7 +19,8 @@ pub struct QemVertices {
     pub mesh: TriMesh,
 }
 
-/// Decimates `mesh` with `keep_original_positions` to exactly `count` vertices.
+/// Decimates `mesh` with `keep_original_positions` to exactly `count` vertices (`mesh` is a
+/// manifold mesh whose vertices are all referenced).
 ///
 /// A collapse removes one vertex and one (boundary) or two (interior) faces, so a pass that
 /// removes `2e − B` faces (`e` excess vertices, `B` boundary vertices) removes at most `e`
@@ -46,12 +48,15 @@ pub fn qem_vertices(mesh: &TriMesh, count: usize) -> Result<QemVertices> {
             },
         )?;
         if out.mesh.vertex_count() >= vertices {
-            bail!(
-                "QEM cannot remove more vertices ({} left of {}, {}): use another method",
-                vertices,
-                mesh.vertex_count(),
-                out.stop_reason.as_str()
-            );
+            return Err(Error::UnusableMesh {
+                what: "QEM vertex selection".into(),
+                message: format!(
+                    "QEM cannot remove more vertices ({} left of {}, {}): use another method",
+                    vertices,
+                    mesh.vertex_count(),
+                    out.stop_reason.as_str()
+                ),
+            });
         }
         let mut next = vec![u32::MAX; out.mesh.vertex_count()];
         for (i, &o) in out.vertex_map.iter().enumerate() {
@@ -68,25 +73,57 @@ pub fn qem_vertices(mesh: &TriMesh, count: usize) -> Result<QemVertices> {
             }
         }
         if next.contains(&u32::MAX) {
-            bail!("QEM produced a vertex at no input position (unreferenced or welded input)");
+            return Err(Error::UnusableMesh {
+                what: "QEM vertex selection".into(),
+                message:
+                    "QEM produced a vertex at no input position (unreferenced or welded input)"
+                        .into(),
+            });
         }
         origin = next;
         current = out.mesh;
     }
     if current.vertex_count() != count {
-        bail!(
-            "QEM stopped at {} vertices instead of {count}: use another method",
-            current.vertex_count()
-        );
+        return Err(Error::UnusableMesh {
+            what: "QEM vertex selection".into(),
+            message: format!(
+                "QEM stopped at {} vertices instead of {count}: use another method",
+                current.vertex_count()
+            ),
+        });
     }
     let mut distinct = origin.clone();
     distinct.sort_unstable();
     distinct.dedup();
     if distinct.len() != count {
-        bail!("QEM mapped two kept vertices to the same input vertex");
+        return Err(Error::UnusableMesh {
+            what: "QEM vertex selection".into(),
+            message: "QEM mapped two kept vertices to the same input vertex".into(),
+        });
     }
     Ok(QemVertices {
         indices: origin,
         mesh: current,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::icosphere;
+
+    #[test]
+    fn keeps_exactly_the_requested_input_vertices() {
+        let mesh = icosphere(3);
+        let kept = qem_vertices(&mesh, 100).unwrap();
+        assert_eq!(kept.indices.len(), 100);
+        assert_eq!(kept.mesh.vertex_count(), 100);
+        for (o, &i) in kept.indices.iter().enumerate() {
+            assert_eq!(kept.mesh.vertices()[o], mesh.vertices()[i as usize]);
+        }
+        let mut distinct = kept.indices.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 100);
+    }
 }
