@@ -4,9 +4,12 @@
 //!
 //! Only the named splits are read (default `train`: the boxes, gears and creatures-a
 //! families; the `test` families stay unseen for the zero-shot evaluation). Every mesh gives
-//! `--clouds-per-shape` clouds of `--points` surface samples. After every epoch a resumable
-//! checkpoint (weights + Adam state) is written to `OUTPUT.checkpoint`; at the end the weights
-//! alone go to `OUTPUT`, the small file `--weights` and the bundled default use.
+//! `--clouds-per-shape` clouds of `--points` surface samples. `--validation-shapes` of them
+//! (spread over the list, so every family gives some) are held out: after every epoch their
+//! loss eq. 5.9 at the benchmark's ratios is computed, and whenever it is the lowest so far the
+//! weights alone go to `OUTPUT` (the small file `--weights` and the bundled default use), so
+//! `OUTPUT` holds the best epoch, not the last. A resumable checkpoint (weights, Adam state,
+//! best validation loss) is written to `OUTPUT.checkpoint` after every epoch.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -49,6 +52,15 @@ pub struct TrainArgs {
     /// Initial Adam learning rate (decayed ×0.99 per epoch).
     #[arg(long, default_value_t = 1e-3)]
     pub learning_rate: f64,
+    /// λ of eq. 5.9, the weight of the curvature term.
+    #[arg(long, default_value_t = 0.1)]
+    pub curvature_weight: f64,
+    /// Temperature τ of the adaptive Chamfer weights (eq. 5.7).
+    #[arg(long, default_value_t = 10.0)]
+    pub tau: f32,
+    /// Shapes held out of training to pick the best epoch (0: keep the last epoch).
+    #[arg(long, default_value_t = 4)]
+    pub validation_shapes: usize,
 }
 
 /// The resumable checkpoint next to `output`.
@@ -78,25 +90,32 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         epochs: args.epochs,
         seed: args.seed,
         learning_rate: args.learning_rate,
+        curvature_weight: args.curvature_weight,
+        tau: args.tau,
         ..Default::default()
     };
-    let jobs: Vec<(usize, &String)> = names
-        .iter()
-        .enumerate()
-        .flat_map(|(i, n)| {
-            (0..args.clouds_per_shape).map(move |c| (i * args.clouds_per_shape + c, n))
-        })
-        .collect();
-    let samples = jobs
-        .par_iter()
-        .map(|&(k, name)| -> Result<TrainingSample> {
-            let mesh = dataset.load(name)?;
-            let cloud = sample_surface(&mesh, args.points, args.seed.wrapping_add(k as u64))
-                .with_context(|| format!("sampling {name}"))?;
-            prepare_training_sample(&cloud.points, &model_config, &config)
-                .with_context(|| format!("preparing {name}"))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let (train_names, validation_names) = hold_out(&names, args.validation_shapes)?;
+    let load = |names: &[&String], first_seed: u64| -> Result<Vec<TrainingSample>> {
+        let jobs: Vec<(usize, &String)> = names
+            .iter()
+            .enumerate()
+            .flat_map(|(i, n)| {
+                (0..args.clouds_per_shape).map(move |c| (i * args.clouds_per_shape + c, *n))
+            })
+            .collect();
+        jobs.par_iter()
+            .map(|&(k, name)| -> Result<TrainingSample> {
+                let mesh = dataset.load(name)?;
+                let seed = first_seed.wrapping_add(k as u64);
+                let cloud = sample_surface(&mesh, args.points, seed)
+                    .with_context(|| format!("sampling {name}"))?;
+                prepare_training_sample(&cloud.points, &model_config, &config)
+                    .with_context(|| format!("preparing {name}"))
+            })
+            .collect()
+    };
+    let samples = load(&train_names, args.seed)?;
+    let validation = load(&validation_names, args.seed.wrapping_add(1 << 32))?;
     let checkpoint = checkpoint_path(&args.output);
     let mut trainer = if args.resume {
         Trainer::resume(&checkpoint, &config)
@@ -112,11 +131,13 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         bar.set_style(style);
     }
     eprintln!(
-        "training on {} clouds of {} points from {} shapes ({:?}), {} epochs from epoch {}",
+        "training on {} clouds of {} points from {} shapes ({:?}; {} held out: {:?}), {} epochs from epoch {}",
         samples.len(),
         args.points,
-        names.len(),
+        train_names.len(),
         args.splits,
+        validation_names.len(),
+        validation_names,
         args.epochs,
         trainer.epoch()
     );
@@ -134,11 +155,22 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             ));
             bar.inc(1);
         })?;
+        // the weights first, then the checkpoint that records them as the best
+        let mut kept = "";
+        let mut validation_text = String::new();
+        if !validation.is_empty() {
+            let v = trainer.validation_loss(&validation)?;
+            validation_text = format!("  validation {v:.6}");
+            if trainer.record_validation(v) {
+                write_weights(&trainer, &args.output)?;
+                kept = "  (best so far: kept)";
+            }
+        }
         trainer
             .save(&checkpoint)
             .with_context(|| format!("writing {}", checkpoint.display()))?;
         let line = format!(
-            "epoch {:>3}: mean loss {epoch_loss:.6}  ({:.0} s)",
+            "epoch {:>3}: mean loss {epoch_loss:.6}{validation_text}{kept}  ({:.0} s)",
             trainer.epoch(),
             started.elapsed().as_secs_f64()
         );
@@ -151,15 +183,70 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         last = epoch_loss;
     }
     bar.finish();
-    trainer
-        .save_weights(&args.output)
-        .with_context(|| format!("writing {}", args.output.display()))?;
+    let kept = match trainer.best_validation() {
+        Some(best) => format!("the best epoch's weights (validation loss {best:.6})"),
+        None => {
+            write_weights(&trainer, &args.output)?;
+            "the last epoch's weights".into()
+        }
+    };
     println!(
-        "wrote {} after {} epochs ({} steps), final mean loss {last:.6}, {:.1} s",
+        "wrote {} ({kept}) after {} epochs ({} steps), final mean loss {last:.6}, {:.1} s",
         args.output.display(),
         trainer.epoch(),
         trainer.steps(),
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+fn write_weights(trainer: &Trainer, output: &Path) -> Result<()> {
+    trainer
+        .save_weights(output)
+        .with_context(|| format!("writing {}", output.display()))
+}
+
+/// Splits `names` into training and `count` validation shapes, spread evenly over the list (a
+/// `synth shapes` manifest lists the families in blocks, so every family gives some).
+fn hold_out(names: &[String], count: usize) -> Result<(Vec<&String>, Vec<&String>)> {
+    if count >= names.len() {
+        bail!(
+            "--validation-shapes {count} leaves no training shape out of {}",
+            names.len()
+        );
+    }
+    if count == 0 {
+        return Ok((names.iter().collect(), Vec::new()));
+    }
+    let stride = names.len() / count;
+    let held = |i: usize| i % stride == stride - 1 && i / stride < count;
+    let (validation, train): (Vec<_>, Vec<_>) =
+        names.iter().enumerate().partition(|&(i, _)| held(i));
+    Ok((
+        train.into_iter().map(|(_, n)| n).collect(),
+        validation.into_iter().map(|(_, n)| n).collect(),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hold_out_spreads_the_validation_shapes_over_the_families() {
+        let names: Vec<String> = ["boxes", "gears", "creatures-a"]
+            .iter()
+            .flat_map(|f| (0..8).map(move |i| format!("{f}_{i:02}")))
+            .collect();
+        let (train, validation) = hold_out(&names, 4).unwrap();
+        assert_eq!(
+            validation,
+            ["boxes_05", "gears_03", "creatures-a_01", "creatures-a_07"]
+        );
+        assert_eq!(train.len(), 20);
+        assert!(train.iter().all(|n| !validation.contains(n)));
+        let (all, none) = hold_out(&names, 0).unwrap();
+        assert_eq!((all.len(), none.len()), (24, 0));
+        assert!(hold_out(&names, 24).is_err());
+    }
 }

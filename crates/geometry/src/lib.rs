@@ -74,6 +74,7 @@ pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage}
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
 pub use surface_sampling::{SurfaceSamples, sample_surface};
+pub use symmetric_eigen3::symmetric_eigen3;
 pub use tangent_chart_triangulation::{
     Reconstruction, TangentChartOptions, tangent_chart_triangulation,
 };

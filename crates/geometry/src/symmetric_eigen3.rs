@@ -3,8 +3,16 @@
 //! cubic solutions lose accuracy. Used by the covariance analysis of thesis eq. 5.1-5.2.
 
 /// Eigenvalues ascending and the matching unit eigenvectors (`vectors[i]` for `values[i]`) of
-/// the symmetric matrix `a` (only its upper triangle is read).
-pub(crate) fn symmetric_eigen3(a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+/// the symmetric matrix `a` (only its upper triangle is read). Public so that differentiable
+/// versions of eq. 5.2 (the losses crate) take the same eigenvectors as the metrics.
+///
+/// ```
+/// use meshgnn_geometry::symmetric_eigen3;
+/// let (values, vectors) = symmetric_eigen3([[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 5.0]]);
+/// assert!((values[0] - 1.0).abs() < 1e-12 && (values[1] - 3.0).abs() < 1e-12);
+/// assert!((vectors[0][0] + vectors[0][1]).abs() < 1e-12 && vectors[0][2].abs() < 1e-12);
+/// ```
+pub fn symmetric_eigen3(a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     let mut m = [
         [a[0][0], a[0][1], a[0][2]],
         [a[0][1], a[1][1], a[1][2]],

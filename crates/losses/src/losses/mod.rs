@@ -8,6 +8,7 @@ mod edge_crossings;
 mod face_penalty;
 #[cfg(test)]
 mod gradient_check;
+mod mean_curvature;
 mod probabilistic_chamfer;
 mod probabilistic_surface_distance;
 mod reconstruction_l1;
@@ -21,6 +22,7 @@ pub use adaptive_chamfer::{adaptive_chamfer, adaptive_chamfer_weights};
 pub use chamfer_loss::chamfer_loss;
 pub use curvature_preservation::curvature_preservation;
 pub use edge_crossings::edge_crossings;
+pub use mean_curvature::mean_curvature;
 pub use probabilistic_chamfer::probabilistic_chamfer;
 pub use probabilistic_surface_distance::{
     ReverseSurfaceParams, probabilistic_surface_forward, probabilistic_surface_reverse,

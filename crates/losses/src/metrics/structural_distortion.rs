@@ -15,8 +15,14 @@
 //!   `C = |σ_a − σ_b| / max(σ_a, σ_b)` (eq. 5.12 prints `max(K̄_1, K̄_2)` in the denominator;
 //!   PC-MSDM and the "contrast" reading use the standard deviations, and so do we), structure
 //!   `S = |σ_a σ_b − σ_ab| / (σ_a σ_b)` (eq. 5.13 prints `σ_12²`, dimensionally inconsistent;
-//!   PC-MSDM uses `σ_ab`). A ratio whose denominator vanishes is 0 when its numerator also
-//!   vanishes (both fields flat there) and 1 otherwise.
+//!   PC-MSDM uses `σ_ab`).
+//! - **Stabilisers.** Curvature is nearly constant over flat regions, where `μ` and `σ` sit at
+//!   the level of sampling noise: bare ratios there swing between 0 and 1 on noise alone and
+//!   saturate the measure (every simplification then scores ≈ 0.7). As SSIM (Wang, Bovik,
+//!   Sheikh & Simoncelli 2004) does for flat image patches, each denominator gets a constant
+//!   tied to the dynamic range `R` of the field (`R = 1/3`, the largest value of eq. 5.2):
+//!   `ε_L = K1 R`, `ε_C = K2 R`, `ε_S = (K2 R)² / 2` with SSIM's `K1 = 0.01`, `K2 = 0.03`.
+//!   With `R = 0` the bare ratios are used, 0/0 → 0 (both fields flat) and x/0 → 1.
 //! - **Weights.** `α = β = γ = 1` (PC-MSDM's choice; the thesis gives no values).
 //! - **Pooling.** Minkowski pooling `SDM = (mean_i D_i^p)^{1/p}` with `p = 3`, as MSDM2 and
 //!   PC-MSDM: it emphasises the worst local distortions more than a plain mean.
@@ -43,6 +49,9 @@ pub struct SdmParams {
     pub neighbours: usize,
     /// Minkowski pooling exponent `p`.
     pub minkowski: f64,
+    /// Dynamic range `R` of the curvature field, which sizes the stabilisers (module docs);
+    /// 1/3 for eq. 5.2, 0 for bare ratios.
+    pub curvature_range: f64,
 }
 
 impl Default for SdmParams {
@@ -53,6 +62,7 @@ impl Default for SdmParams {
             gamma: 1.0,
             neighbours: 16,
             minkowski: 3.0,
+            curvature_range: 1.0 / 3.0,
         }
     }
 }
@@ -60,7 +70,11 @@ impl Default for SdmParams {
 /// Threshold below which a denominator of eq. 5.11-5.13 counts as zero.
 const TINY: f64 = 1e-12;
 
-/// `num / den`, with 0/0 → 0 and x/0 → 1 (see the module docs).
+/// SSIM's constants for the first- and second-order stabilisers.
+const K1: f64 = 0.01;
+const K2: f64 = 0.03;
+
+/// `num / den` clamped to 1, with 0/0 → 0 and x/0 → 1 (see the module docs).
 fn safe_ratio(num: f64, den: f64) -> f64 {
     if den > TINY {
         (num / den).min(1.0)
@@ -111,6 +125,17 @@ pub fn structural_distortion(
             message: "must be at least 1".into(),
         });
     }
+    if !(params.curvature_range.is_finite() && params.curvature_range >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "curvature_range",
+            message: format!(
+                "must be finite and non-negative, got {}",
+                params.curvature_range
+            ),
+        });
+    }
+    let range = params.curvature_range;
+    let (eps_l, eps_c, eps_s) = (K1 * range, K2 * range, (K2 * range).powi(2) / 2.0);
     if !(params.minkowski.is_finite() && params.minkowski >= 1.0) {
         return Err(Error::InvalidParameter {
             name: "minkowski",
@@ -158,9 +183,9 @@ pub fn structural_distortion(
             cab += w * (a - ma) * (b - mb);
         }
         let (sa, sb, sab) = ((va / sw).sqrt(), (vb / sw).sqrt(), cab / sw);
-        let l = safe_ratio((ma - mb).abs(), ma.abs().max(mb.abs()));
-        let c = safe_ratio((sa - sb).abs(), sa.max(sb));
-        let s = safe_ratio((sa * sb - sab).abs(), sa * sb);
+        let l = safe_ratio((ma - mb).abs(), ma.abs().max(mb.abs()) + eps_l);
+        let c = safe_ratio((sa - sb).abs(), sa.max(sb) + eps_c);
+        let s = safe_ratio((sa * sb - sab).abs(), sa * sb + eps_s);
         let d = (params.alpha * l + params.beta * c + params.gamma * s) / weight_sum;
         d.powf(params.minkowski)
     };
@@ -192,13 +217,51 @@ mod tests {
         let p = line(10);
         let a = vec![1.0f32; 10];
         let b = vec![2.0f32; 10];
-        let params = SdmParams {
+        let bare = SdmParams {
             neighbours: 1,
+            curvature_range: 0.0,
             ..SdmParams::default()
         };
-        let sdm = structural_distortion(&p, &a, &p, &b, params).unwrap();
+        let sdm = structural_distortion(&p, &a, &p, &b, bare).unwrap();
         // D_i = (0.5 + 0 + 0) / 3 for every i; Minkowski pooling of a constant is the constant.
         assert!((sdm - 0.5 / 3.0).abs() < 1e-12, "{sdm}");
+        // stabilised: L = 1 / (2 + 0.01 · R), C = 0 / ε_C = 0, S = 0 / ε_S = 0
+        let stabilised = SdmParams {
+            curvature_range: 0.3,
+            ..bare
+        };
+        let sdm = structural_distortion(&p, &a, &p, &b, stabilised).unwrap();
+        assert!((sdm - 1.0 / (2.003 * 3.0)).abs() < 1e-12, "{sdm}");
+    }
+
+    #[test]
+    fn noise_on_flat_fields_does_not_saturate_the_measure() {
+        // Both fields flat up to noise of 1e-5 (what PCA curvature gives on a plane): the bare
+        // ratios read the noise as full contrast and structure distortion, the stabilised
+        // ones as nothing; a real difference (0.05 vs 0.1) still scores high.
+        let p = line(80);
+        let noise = |seed: usize| -> Vec<f32> {
+            (0..80)
+                .map(|i| ((i * 7919 + seed * 104_729) % 101) as f32 * 1e-7)
+                .collect()
+        };
+        let (a, b) = (noise(1), noise(2));
+        let bare = SdmParams {
+            curvature_range: 0.0,
+            ..SdmParams::default()
+        };
+        let noisy_bare = structural_distortion(&p, &a, &p, &b, bare).unwrap();
+        let noisy = structural_distortion(&p, &a, &p, &b, SdmParams::default()).unwrap();
+        assert!(noisy_bare > 0.2, "{noisy_bare}");
+        assert!(noisy < 0.01, "{noisy}");
+        let low = vec![0.05f32; 80];
+        let high = vec![0.1f32; 80];
+        let real = structural_distortion(&p, &low, &p, &high, SdmParams::default()).unwrap();
+        // L = 0.05 / (0.1 + 0.01/3) ≈ 0.48, C = S = 0: D ≈ 0.16
+        assert!(
+            (real - 0.05 / (0.1 + 0.01 / 3.0) / 3.0).abs() < 1e-6,
+            "{real}"
+        );
     }
 
     #[test]
@@ -222,6 +285,11 @@ mod tests {
         let k = vec![0.0f32; 5];
         let bad = SdmParams {
             minkowski: 0.5,
+            ..SdmParams::default()
+        };
+        assert!(structural_distortion(&p, &k, &p, &k, bad).is_err());
+        let bad = SdmParams {
+            curvature_range: -1.0,
             ..SdmParams::default()
         };
         assert!(structural_distortion(&p, &k, &p, &k, bad).is_err());

@@ -29,6 +29,8 @@ pub struct CheckpointState {
     pub seed: u64,
     /// Mean loss of the last completed epoch.
     pub loss: f64,
+    /// Lowest validation loss recorded so far ([`super::Trainer::record_validation`]), if any.
+    pub best_validation: Option<f64>,
 }
 
 /// A decoded checkpoint.
@@ -88,6 +90,9 @@ pub fn write_checkpoint(
         meta.insert("step".into(), s.step.to_string());
         meta.insert("seed".into(), s.seed.to_string());
         meta.insert("loss".into(), format!("{:e}", s.loss));
+        if let Some(v) = s.best_validation {
+            meta.insert("best_validation".into(), format!("{v:e}"));
+        }
     }
     let contiguous = tensors
         .iter()
@@ -162,6 +167,11 @@ pub fn read_checkpoint(bytes: &[u8], path: &Path) -> Result<Checkpoint> {
             loss: get("loss")?
                 .parse()
                 .map_err(|e| fail(format!("metadata \"loss\": {e}")))?,
+            best_validation: meta
+                .get("best_validation")
+                .map(|v| v.parse())
+                .transpose()
+                .map_err(|e| fail(format!("metadata \"best_validation\": {e}")))?,
         })
     } else {
         None

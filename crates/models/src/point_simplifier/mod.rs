@@ -30,5 +30,6 @@ pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_i
 pub use simplifier_loss::{CURVATURE_LOSS_WEIGHT, SimplifierLoss, simplifier_loss};
 pub use simplify::{Simplification, SimplifyOptions};
 pub use training::{
-    Trainer, TrainingConfig, TrainingProgress, TrainingSample, prepare_training_sample,
+    Trainer, TrainingConfig, TrainingProgress, TrainingSample, VALIDATION_RATIOS,
+    prepare_training_sample,
 };

@@ -4,11 +4,11 @@
 //! Both terms are the ones of `meshgnn-losses`; this file only combines them.
 //!
 //! # Conventions
-//! The simplified points' curvatures are the input's `K̄` gathered at the selected centres (the
-//! selection is a subset of the input). As the selection is not differentiable, `E_c` reports
-//! how well curvature is kept but sends no gradient; the adaptive Chamfer weights are what
-//! steer training towards salient points — which is also the case in the thesis, where FPS is
-//! the non-differentiable step.
+//! The simplified points' curvatures `K̄_2` are computed on the simplified cloud itself
+//! (`meshgnn_losses::losses::mean_curvature`, differentiable in the refined positions), as
+//! eq. 5.8 writes them and as the CE metric scores them: the curvature term then trains AttRef's
+//! displacements and, through the embeddings AttRef reads, the projector. The FPS selection
+//! itself stays the non-differentiable step, as in the thesis.
 
 use candle_core::Tensor;
 use meshgnn_losses::losses::{adaptive_chamfer, curvature_preservation};
