@@ -4,6 +4,7 @@
 //! cargo run --release -p meshgnn-graph --example qem -- IN.ply --ratio 0.1 [--meshopt]
 //! cargo run --release -p meshgnn-graph --example qem -- --make-bumpy 8 OUT.ply
 //! ```
+//! `--out OUT.ply` writes the simplified mesh (to compare outputs across versions).
 //! `--no-metrics` skips the distances (for peak-RSS measurements of the decimation alone).
 //! `--meshopt` runs meshoptimizer's `simplify` (LockBorder, no error limit) instead, for
 //! comparison. `--make-bumpy S OUT` writes the benchmark mesh: `icosphere(S)` with smooth,
@@ -129,6 +130,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (v, t, "meshgnn")
     };
     let seconds = start.elapsed().as_secs_f64();
+    if let Some(path) = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1))
+    {
+        write_mesh(
+            path,
+            &TriMesh::new(out_vertices.clone(), out_triangles.clone())?,
+        )?;
+    }
     if args.iter().any(|a| a == "--no-metrics") {
         println!(
             "{{\"method\": \"{method}\", \"input_faces\": {}, \"output_faces\": {}, \"seconds\": {seconds:.4}}}",

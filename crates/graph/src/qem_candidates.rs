@@ -73,21 +73,23 @@ pub(crate) fn radix_sort(items: &mut Vec<Candidate>, scratch: &mut Vec<Candidate
     }
 }
 
-/// Merges two key-sorted lists; on equal keys `first`'s items come first.
-pub(crate) fn merge_sorted(first: &[Candidate], second: &[Candidate]) -> Vec<Candidate> {
+/// Merges the items of `first` that pass `keep` with `second` (both key-sorted); on equal
+/// keys `first`'s items come first. Filtering while merging reads `first` once.
+pub(crate) fn merge_sorted(
+    first: &[Candidate],
+    keep: impl Fn(&Candidate) -> bool,
+    second: &[Candidate],
+) -> Vec<Candidate> {
     let mut merged = Vec::with_capacity(first.len() + second.len());
-    let (mut i, mut j) = (0, 0);
-    while i < first.len() && j < second.len() {
-        if first[i].key <= second[j].key {
-            merged.push(first[i]);
-            i += 1;
-        } else {
-            merged.push(second[j]);
+    let mut j = 0;
+    for item in first.iter().filter(|c| keep(c)) {
+        while let Some(next) = second.get(j).filter(|n| n.key < item.key) {
+            merged.push(*next);
             j += 1;
         }
+        merged.push(*item);
     }
-    merged.extend_from_slice(&first[i..]);
-    merged.extend_from_slice(&second[j..]);
+    merged.extend_from_slice(second.get(j..).unwrap_or_default());
     merged
 }
 
@@ -128,8 +130,13 @@ mod tests {
     #[test]
     fn merge_prefers_the_first_list_on_ties() {
         let c = |key, a| Candidate { key, a, b: 0 };
-        let merged = merge_sorted(&[c(1, 0), c(3, 1)], &[c(1, 2), c(2, 3), c(4, 4)]);
+        let merged = merge_sorted(&[c(1, 0), c(3, 1)], |_| true, &[c(1, 2), c(2, 3), c(4, 4)]);
         let order: Vec<u32> = merged.iter().map(|x| x.a).collect();
         assert_eq!(order, vec![0, 2, 3, 1, 4]);
+        // Filtered items of the first list are dropped, the second list kept whole.
+        let first = [c(1, 0), c(2, 1), c(5, 2), c(6, 3)];
+        let merged = merge_sorted(&first, |x| x.a % 2 == 0, &[c(2, 4), c(7, 5)]);
+        let order: Vec<u32> = merged.iter().map(|x| x.a).collect();
+        assert_eq!(order, vec![0, 4, 2, 5]);
     }
 }

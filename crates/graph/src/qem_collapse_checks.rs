@@ -32,6 +32,26 @@ fn common_count(x: &[u32], y: &[u32]) -> usize {
     x.iter().filter(|v| y.contains(v)).count()
 }
 
+/// Reusable buffers of [`Collapser::collapse_allowed`] (one per thread), holding after a call
+/// the neighbours the check read: its *footprint*.
+#[derive(Debug, Default)]
+pub(crate) struct CheckScratch {
+    fan_a: Vec<[u32; 3]>,
+    fan_b: Vec<[u32; 3]>,
+    ring_a: Vec<u32>,
+    ring_b: Vec<u32>,
+    pairs: Vec<[u32; 2]>,
+}
+
+impl CheckScratch {
+    /// The neighbours of `a` and `b` read by the last check (besides `a` and `b`; the apexes of
+    /// the shared faces appear twice). The check's answer can only change when one of these or
+    /// an endpoint changes.
+    pub(crate) fn footprint(&self) -> impl Iterator<Item = u32> + '_ {
+        self.ring_a.iter().chain(&self.ring_b).copied()
+    }
+}
+
 impl Collapser {
     /// Collects the live faces around `v` into `fan` and its neighbours other than `skip`
     /// (each once) into `ring`.
@@ -62,24 +82,29 @@ impl Collapser {
     /// opposite edges `(x, y)` (duplicate faces); `a` and `b` are all their component has
     /// left; or a moved face turns by more than `acos(MIN_NORMAL_COS)`, leaves the input
     /// surface its corners stand for by more than `acos(MIN_REGION_COS)`, or degenerates.
-    pub(crate) fn collapse_allowed(&mut self, a: u32, b: u32, p: [f32; 3]) -> bool {
-        let mut fan_a = std::mem::take(&mut self.scratch_fan_a);
-        let mut fan_b = std::mem::take(&mut self.scratch_fan_b);
-        let mut ring_a = std::mem::take(&mut self.scratch_ring_a);
-        let mut ring_b = std::mem::take(&mut self.scratch_ring_b);
-        self.gather(a, b, &mut fan_a, &mut ring_a);
-        self.gather(b, a, &mut fan_b, &mut ring_b);
-        let ok = self.fans_allow(a, b, p, &fan_a, &fan_b, &ring_a, &ring_b);
-        self.scratch_fan_a = fan_a;
-        self.scratch_fan_b = fan_b;
-        self.scratch_ring_a = ring_a;
-        self.scratch_ring_b = ring_b;
-        ok
+    /// Reads only `a`, `b`, their fans and their neighbours (`scratch.footprint()` afterwards).
+    pub(crate) fn collapse_allowed(
+        &self,
+        a: u32,
+        b: u32,
+        p: [f32; 3],
+        scratch: &mut CheckScratch,
+    ) -> bool {
+        let CheckScratch {
+            fan_a,
+            fan_b,
+            ring_a,
+            ring_b,
+            pairs,
+        } = scratch;
+        self.gather(a, b, fan_a, ring_a);
+        self.gather(b, a, fan_b, ring_b);
+        self.fans_allow(a, b, p, fan_a, fan_b, ring_a, ring_b, pairs)
     }
 
     #[allow(clippy::too_many_arguments)]
     fn fans_allow(
-        &mut self,
+        &self,
         a: u32,
         b: u32,
         p: [f32; 3],
@@ -87,6 +112,7 @@ impl Collapser {
         fan_b: &[[u32; 3]],
         ring_a: &[u32],
         ring_b: &[u32],
+        pairs: &mut Vec<[u32; 2]>,
     ) -> bool {
         let shared = fan_b.iter().filter(|f| f.contains(&a)).count();
         if shared == 0 || shared > 2 || fan_a.len() + fan_b.len() == 2 * shared {
@@ -99,14 +125,14 @@ impl Collapser {
             return false;
         }
         // Duplicate faces: an opposite edge present around both a and b.
-        self.scratch_pairs.clear();
+        pairs.clear();
         for &face in fan_a.iter().filter(|f| !f.contains(&b)) {
             let [x, y] = others(face, a);
-            self.scratch_pairs.push([x.min(y), x.max(y)]);
+            pairs.push([x.min(y), x.max(y)]);
         }
         for &face in fan_b.iter().filter(|f| !f.contains(&a)) {
             let [x, y] = others(face, b);
-            if self.scratch_pairs.contains(&[x.min(y), x.max(y)]) {
+            if pairs.contains(&[x.min(y), x.max(y)]) {
                 return false;
             }
         }

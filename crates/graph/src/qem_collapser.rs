@@ -5,10 +5,10 @@
 //! `qem_decimation.rs`.
 //!
 //! # Layout
-//! Everything the collapse loop reads for a vertex (position, region normal, pass stamp,
-//! flags) sits in one 32-byte, 32-aligned [`VertexRecord`], so a vertex costs one cache-line
-//! fetch; quadrics (80 bytes, needed only to score an edge) are a separate array. Dead faces
-//! and vertices are marked in place ([`DEAD`]), not in side arrays.
+//! Everything the collapse loop reads for a vertex (position, region normal, where its
+//! incidence list is, flags) sits in one 32-byte, 32-aligned [`VertexRecord`], so a vertex
+//! costs one cache-line fetch; quadrics (80 bytes, needed only to score an edge) are a
+//! separate array. Dead faces and vertices are marked in place, not in side arrays.
 
 use meshgnn_geometry::TriMesh;
 use meshgnn_geometry::vec3::{cross, dot, sub};
@@ -19,15 +19,21 @@ use crate::qem_decimation::{Decimation, DecimationOptions, StopReason};
 use crate::quadric::Quadric;
 use crate::weld_by_position::weld_by_position;
 
-/// Marks a dead face (`faces[f] = [DEAD; 3]`) and a dead vertex (`stamp == DEAD`).
+/// Marks a dead face (`faces[f] = [DEAD; 3]`).
 pub(crate) const DEAD: u32 = u32::MAX;
 /// Vertex flag: never moved or removed (non-manifold edge or UV seam).
 pub(crate) const LOCKED: u32 = 1;
 /// Vertex flag: on the input's open boundary.
 pub(crate) const BOUNDARY: u32 = 2;
+/// Vertex flag: removed by a collapse.
+const REMOVED: u32 = 4;
+/// The flags' bits of [`VertexRecord::meta`]; the incidence list length is stored above them.
+const FLAG_BITS: u32 = 3;
 /// The largest supported face count: incidence offsets are `u32` (`refs` stays below
-/// `4 · #F + 1024` plus one fan).
-const MAX_FACES: usize = 1_000_000_000;
+/// `4 · #F + 1024` plus one fan) and a vertex's face count fits in `32 − FLAG_BITS` bits.
+const MAX_FACES: usize = 500_000_000;
+/// Vertices per parallel task of the setup's edge enumeration.
+const EDGE_CHUNK: usize = 2048;
 
 /// The hot per-vertex data of the collapse loop, one half cache line.
 #[derive(Debug, Clone, Copy, Default)]
@@ -38,23 +44,36 @@ pub(crate) struct VertexRecord {
     /// Sum of the (doubled-)area normals of the input faces around the input vertices this
     /// vertex represents: the orientation of the input surface it stands for.
     pub region_normal: [f32; 3],
-    /// The pass in which this vertex last changed (0: never); [`DEAD`] once removed.
-    pub stamp: u32,
-    /// [`LOCKED`] | [`BOUNDARY`].
-    pub flags: u32,
+    /// Start of this vertex's incident faces in [`Collapser::refs`].
+    pub start: u32,
+    /// `len << FLAG_BITS | flags`: the number of incident faces (which may include dead
+    /// ones) and [`LOCKED`] | [`BOUNDARY`] | `REMOVED`.
+    pub meta: u32,
 }
 
 impl VertexRecord {
     pub(crate) fn alive(&self) -> bool {
-        self.stamp != DEAD
+        self.meta & REMOVED == 0
     }
 
     pub(crate) fn locked(&self) -> bool {
-        self.flags & LOCKED != 0
+        self.meta & LOCKED != 0
     }
 
     pub(crate) fn boundary(&self) -> bool {
-        self.flags & BOUNDARY != 0
+        self.meta & BOUNDARY != 0
+    }
+
+    /// The range of `refs` holding the incident faces.
+    pub(crate) fn incident(&self) -> std::ops::Range<usize> {
+        let start = self.start as usize;
+        start..start + (self.meta >> FLAG_BITS) as usize
+    }
+
+    /// Points the incidence list at `refs[start..start + len]`.
+    fn set_incident(&mut self, start: usize, len: usize) {
+        self.start = start as u32;
+        self.meta = (len as u32) << FLAG_BITS | (self.meta & ((1 << FLAG_BITS) - 1));
     }
 
     pub(crate) fn point(&self) -> [f64; 3] {
@@ -99,10 +118,9 @@ pub(crate) struct Collapser {
     /// `[DEAD; 3]` once removed.
     pub faces: Vec<[u32; 3]>,
     pub live_faces: usize,
-    /// Incident faces of vertex `v`: `refs[links[v].0 ..][.. links[v].1]` (may hold dead
-    /// faces, skipped on use).
+    /// Incident faces of vertex `v`: `refs[verts[v].incident()]` (may hold dead faces,
+    /// skipped on use).
     pub refs: Vec<u32>,
-    pub links: Vec<(u32, u32)>,
     parent: Vec<u32>,
     normals: Option<Vec<[f32; 3]>>,
     uvs: Option<Vec<[f32; 2]>>,
@@ -111,11 +129,6 @@ pub(crate) struct Collapser {
     welded: bool,
     /// The setup's edges (manifold ones), scored in the first pass.
     pub initial_edges: Vec<(u32, u32)>,
-    pub scratch_fan_a: Vec<[u32; 3]>,
-    pub scratch_fan_b: Vec<[u32; 3]>,
-    pub scratch_ring_a: Vec<u32>,
-    pub scratch_ring_b: Vec<u32>,
-    pub scratch_pairs: Vec<[u32; 2]>,
     scratch_faces: Vec<u32>,
     pub max_cost: f64,
     pub max_error: f64,
@@ -222,32 +235,50 @@ impl Collapser {
             })
             .unzip();
 
-        // Undirected edges `(a < b, face count, first face)`, enumerated per vertex from the
-        // incidence lists (parallel, no global sort): boundary and non-manifold detection.
-        let grouped: Vec<(u32, u32, u32, u32)> = (0..n)
+        // Undirected edges `(a < b)`, enumerated per vertex from the incidence lists (parallel,
+        // no global sort), in chunks of vertices with one scratch list each: the collapsible
+        // (manifold) edges, and apart the boundary and non-manifold ones as
+        // `(a, b, face count, first face)`.
+        type Special = (u32, u32, u32, u32);
+        type EdgeChunk = (Vec<(u32, u32)>, Vec<Special>);
+        let chunks: Vec<EdgeChunk> = (0..n.div_ceil(EDGE_CHUNK))
             .into_par_iter()
-            .flat_map_iter(|a| {
-                let (start, len) = links[a];
-                let mut local: Vec<(u32, u32)> = Vec::with_capacity(2 * len as usize);
-                for &f in &refs[start as usize..(start + len) as usize] {
-                    for x in faces[f as usize] {
-                        if x as usize > a {
-                            local.push((x, f));
+            .map(|chunk| {
+                let vertices = chunk * EDGE_CHUNK..n.min((chunk + 1) * EDGE_CHUNK);
+                let mut edges = Vec::with_capacity(3 * vertices.len());
+                let mut special = Vec::new();
+                let mut local: Vec<(u32, u32)> = Vec::new();
+                for a in vertices {
+                    let (start, len) = links[a];
+                    local.clear();
+                    for &f in &refs[start as usize..(start + len) as usize] {
+                        for x in faces[f as usize] {
+                            if x as usize > a {
+                                local.push((x, f));
+                            }
                         }
                     }
-                }
-                local.sort_unstable();
-                let mut out = Vec::with_capacity(local.len());
-                let mut i = 0;
-                while i < local.len() {
-                    let mut j = i + 1;
-                    while j < local.len() && local[j].0 == local[i].0 {
-                        j += 1;
+                    local.sort_unstable();
+                    let mut i = 0;
+                    while i < local.len() {
+                        let mut j = i + 1;
+                        while j < local.len() && local[j].0 == local[i].0 {
+                            j += 1;
+                        }
+                        let (a, b) = (a as u32, local[i].0);
+                        match j - i {
+                            2 => edges.push((a, b)),
+                            count => {
+                                if count == 1 {
+                                    edges.push((a, b));
+                                }
+                                special.push((a, b, count as u32, local[i].1));
+                            }
+                        }
+                        i = j;
                     }
-                    out.push((a as u32, local[i].0, (j - i) as u32, local[i].1));
-                    i = j;
                 }
-                out
+                (edges, special)
             })
             .collect();
         let mut flags: Vec<u32> = welding
@@ -255,37 +286,35 @@ impl Collapser {
             .iter()
             .map(|&s| if s { LOCKED } else { 0 })
             .collect();
-        let mut edges: Vec<(u32, u32)> = Vec::with_capacity(grouped.len());
-        for &(a, b, count, f) in &grouped {
-            match count {
-                1 => {
-                    flags[a as usize] |= BOUNDARY;
-                    flags[b as usize] |= BOUNDARY;
-                    let (normal, _) = face_normal(f);
-                    let (pa, pb) = (positions[a as usize], positions[b as usize]);
-                    let e = sub(pb, pa);
-                    let w = options.boundary_weight * dot(e, e);
-                    let q = Quadric::from_plane(cross(e, normal), pa, w);
-                    quadrics[a as usize] += q;
-                    quadrics[b as usize] += q;
-                    edges.push((a, b));
-                }
-                2 => edges.push((a, b)),
-                _ => {
-                    flags[a as usize] |= LOCKED;
-                    flags[b as usize] |= LOCKED;
-                }
+        for &(a, b, count, f) in chunks.iter().flat_map(|(_, special)| special) {
+            if count == 1 {
+                flags[a as usize] |= BOUNDARY;
+                flags[b as usize] |= BOUNDARY;
+                let (normal, _) = face_normal(f);
+                let (pa, pb) = (positions[a as usize], positions[b as usize]);
+                let e = sub(pb, pa);
+                let w = options.boundary_weight * dot(e, e);
+                let q = Quadric::from_plane(cross(e, normal), pa, w);
+                quadrics[a as usize] += q;
+                quadrics[b as usize] += q;
+            } else {
+                flags[a as usize] |= LOCKED;
+                flags[b as usize] |= LOCKED;
             }
         }
-        drop(grouped);
+        let mut edges: Vec<(u32, u32)> =
+            Vec::with_capacity(chunks.iter().map(|(e, _)| e.len()).sum());
+        for (chunk, _) in chunks {
+            edges.extend_from_slice(&chunk);
+        }
 
         let verts = (0..n)
             .into_par_iter()
             .map(|v| VertexRecord {
                 position: positions[v].map(|x| x as f32),
                 region_normal: region[v].map(|x| x as f32),
-                stamp: 0,
-                flags: flags[v],
+                start: links[v].0,
+                meta: links[v].1 << FLAG_BITS | flags[v],
             })
             .collect();
         let live_faces = faces.len();
@@ -295,7 +324,6 @@ impl Collapser {
             faces,
             live_faces,
             refs,
-            links,
             parent: (0..n as u32).collect(),
             normals,
             uvs,
@@ -303,11 +331,6 @@ impl Collapser {
             welded: welding.merged_any(),
             weld_map: welding.map,
             initial_edges: edges,
-            scratch_fan_a: Vec::new(),
-            scratch_fan_b: Vec::new(),
-            scratch_ring_a: Vec::new(),
-            scratch_ring_b: Vec::new(),
-            scratch_pairs: Vec::new(),
             scratch_faces: Vec::new(),
             max_cost: 0.0,
             max_error: 0.0,
@@ -318,13 +341,11 @@ impl Collapser {
 
     /// The range of `refs` holding the incident faces of `v`.
     pub(crate) fn incident(&self, v: u32) -> std::ops::Range<usize> {
-        let (start, len) = self.links[v as usize];
-        start as usize..(start + len) as usize
+        self.verts[v as usize].incident()
     }
 
-    /// Collapses `(a, b)` at `placement` and updates the connectivity; stamps the survivor
-    /// with `pass`.
-    pub(crate) fn collapse(&mut self, a: u32, b: u32, placement: Placement, pass: u32) {
+    /// Collapses `(a, b)` at `placement` and updates the connectivity.
+    pub(crate) fn collapse(&mut self, a: u32, b: u32, placement: Placement) {
         let s = placement.survivor;
         let r = if s == a { b } else { a };
         let (is, ir) = (s as usize, r as usize);
@@ -357,8 +378,9 @@ impl Collapser {
             }
         }
         self.refs.extend_from_slice(&self.scratch_faces);
-        self.links[is] = (start as u32, (self.refs.len() - start) as u32);
-        self.links[ir] = (0, 0);
+        let len = self.refs.len() - start;
+        self.verts[is].set_incident(start, len);
+        self.verts[ir].set_incident(0, 0);
 
         // Attributes at the placement's parameter along a → b.
         let t = placement.t;
@@ -379,9 +401,8 @@ impl Collapser {
         survivor.position = placement.position;
         survivor.region_normal =
             std::array::from_fn(|k| survivor.region_normal[k] + removed.region_normal[k]);
-        survivor.flags |= removed.flags & BOUNDARY;
-        survivor.stamp = pass;
-        self.verts[ir].stamp = DEAD;
+        survivor.meta |= removed.meta & BOUNDARY;
+        self.verts[ir].meta |= REMOVED;
         self.parent[ir] = s;
         self.collapses += 1;
         self.max_cost = self.max_cost.max(placement.cost);
@@ -398,7 +419,7 @@ impl Collapser {
     /// Rewrites `refs` with only the live faces of live vertices.
     fn compact_refs(&mut self) {
         let mut refs = Vec::with_capacity(3 * self.live_faces);
-        for v in 0..self.links.len() {
+        for v in 0..self.verts.len() {
             let range = self.incident(v as u32);
             let start = refs.len();
             refs.extend(
@@ -407,7 +428,8 @@ impl Collapser {
                     .copied()
                     .filter(|&f| self.faces[f as usize][0] != DEAD),
             );
-            self.links[v] = (start as u32, (refs.len() - start) as u32);
+            let len = refs.len() - start;
+            self.verts[v].set_incident(start, len);
         }
         self.refs = refs;
     }
