@@ -67,6 +67,7 @@ impl Quadric {
     ///     + Quadric::from_plane([0.0, 1.0, 0.0], [0.0; 3], 1.0);
     /// assert!((q.evaluate([3.0, 4.0, 7.0]) - 25.0).abs() < 1e-12);
     /// ```
+    #[inline]
     pub fn evaluate(&self, v: [f64; 3]) -> f64 {
         let [a00, a01, a02, a11, a12, a22] = self.a;
         let [x, y, z] = v;
@@ -107,6 +108,7 @@ impl Quadric {
     /// // A single plane has no unique minimiser.
     /// assert!(Quadric::from_plane([0.0, 0.0, 1.0], corner, 1.0).optimal_point().is_none());
     /// ```
+    #[inline]
     pub fn optimal_point(&self) -> Option<[f64; 3]> {
         let [a00, a01, a02, a11, a12, a22] = self.a;
         // Cofactors of the symmetric matrix.
