@@ -182,15 +182,21 @@ mod tests {
         sphere.with_vertices(vertices).unwrap()
     }
 
-    #[test]
-    fn reused_buffer_skips_changed_endpoints_and_matches_fresh_checks() {
+    /// The collapser of a noisy sphere and every initial edge as a candidate batch.
+    fn noisy_sphere_with_every_edge() -> (Collapser, Vec<Candidate>) {
         let mesh = noisy_sphere(3, 0.08);
         let mut state = Collapser::new(&mesh, &DecimationOptions::default()).unwrap();
-        let n = state.verts.len();
-        let batch: Vec<Candidate> = std::mem::take(&mut state.initial_edges)
+        let batch = std::mem::take(&mut state.initial_edges)
             .into_iter()
             .map(|(a, b)| Candidate { key: 0, a, b })
             .collect();
+        (state, batch)
+    }
+
+    #[test]
+    fn reused_buffer_skips_changed_endpoints_and_matches_fresh_checks() {
+        let (state, batch) = noisy_sphere_with_every_edge();
+        let n = state.verts.len();
         let mut specs = Speculations::default();
         // Fill the buffer with a larger batch first: its stale entries must not leak.
         state.speculate(&batch, &VertexBits::new(n), None, &mut specs);
@@ -222,13 +228,8 @@ mod tests {
 
     #[test]
     fn verdicts_match_fresh_checks_unless_their_footprint_changed() {
-        let mesh = noisy_sphere(3, 0.08);
-        let mut state = Collapser::new(&mesh, &DecimationOptions::default()).unwrap();
+        let (mut state, batch) = noisy_sphere_with_every_edge();
         let n = state.verts.len();
-        let batch: Vec<Candidate> = std::mem::take(&mut state.initial_edges)
-            .into_iter()
-            .map(|(a, b)| Candidate { key: 0, a, b })
-            .collect();
         let mut specs = Speculations::default();
         state.speculate(&batch, &VertexBits::new(n), None, &mut specs);
         assert_eq!(specs.results.len(), batch.len());
