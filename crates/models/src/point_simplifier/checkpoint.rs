@@ -44,18 +44,6 @@ pub struct Checkpoint {
     pub state: Option<CheckpointState>,
 }
 
-fn config_entries(c: &PointSimplifierConfig) -> [(&'static str, usize); 7] {
-    [
-        ("hidden", c.hidden),
-        ("mlp_layers", c.mlp_layers),
-        ("gnn_neighbours", c.gnn_neighbours),
-        ("refine_neighbours", c.refine_neighbours),
-        ("attention_dim", c.attention_dim),
-        ("phi_hidden", c.phi_hidden),
-        ("gamma_hidden", c.gamma_hidden),
-    ]
-}
-
 /// Writes `tensors` with `config` and `state` to `path` atomically.
 ///
 /// ```
@@ -80,7 +68,8 @@ pub fn write_checkpoint(
         path: path.to_path_buf(),
         reason,
     };
-    let mut meta: HashMap<String, String> = config_entries(config)
+    let mut meta: HashMap<String, String> = config
+        .entries()
         .iter()
         .map(|(k, v)| ((*k).to_string(), v.to_string()))
         .collect();

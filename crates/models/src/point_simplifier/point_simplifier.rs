@@ -57,6 +57,21 @@ impl Default for PointSimplifierConfig {
     }
 }
 
+impl PointSimplifierConfig {
+    /// Every field by name: checked by [`PointSimplifier::new`], stored in checkpoints.
+    pub(crate) fn entries(&self) -> [(&'static str, usize); 7] {
+        [
+            ("hidden", self.hidden),
+            ("mlp_layers", self.mlp_layers),
+            ("gnn_neighbours", self.gnn_neighbours),
+            ("refine_neighbours", self.refine_neighbours),
+            ("attention_dim", self.attention_dim),
+            ("phi_hidden", self.phi_hidden),
+            ("gamma_hidden", self.gamma_hidden),
+        ]
+    }
+}
+
 /// Wall-clock time of each stage of one simplification (the thesis' ch. 5.5 speed split).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StageTimings {
@@ -107,15 +122,7 @@ impl PointSimplifier {
     /// ```
     pub fn new(vb: VarBuilder, config: &PointSimplifierConfig) -> Result<Self> {
         let c = *config;
-        for (name, v) in [
-            ("hidden", c.hidden),
-            ("mlp_layers", c.mlp_layers),
-            ("gnn_neighbours", c.gnn_neighbours),
-            ("refine_neighbours", c.refine_neighbours),
-            ("attention_dim", c.attention_dim),
-            ("phi_hidden", c.phi_hidden),
-            ("gamma_hidden", c.gamma_hidden),
-        ] {
+        for (name, v) in c.entries() {
             if v == 0 {
                 return Err(Error::Invalid {
                     what: format!("config.{name}"),

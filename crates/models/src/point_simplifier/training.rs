@@ -643,25 +643,12 @@ mod tests {
         assert_eq!(loaded.config(), &mc);
         let bytes = std::fs::read(&path).unwrap();
         let ck = read_checkpoint(&bytes, &path).unwrap();
+        let bits = |t: &Tensor| -> Vec<u32> {
+            let values = t.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+            values.iter().map(|v| v.to_bits()).collect()
+        };
         for (name, t) in a.weights().unwrap() {
-            let u = &ck.tensors[&name];
-            let x: Vec<u32> = t
-                .flatten_all()
-                .unwrap()
-                .to_vec1::<f32>()
-                .unwrap()
-                .iter()
-                .map(|v| v.to_bits())
-                .collect();
-            let y: Vec<u32> = u
-                .flatten_all()
-                .unwrap()
-                .to_vec1::<f32>()
-                .unwrap()
-                .iter()
-                .map(|v| v.to_bits())
-                .collect();
-            assert_eq!(x, y, "{name}");
+            assert_eq!(bits(&t), bits(&ck.tensors[&name]), "{name}");
         }
         // the loaded model (inference path: sparse mean in f64, host gathers) simplifies like
         // the trained one (autograd path): same selection, positions equal to rounding
