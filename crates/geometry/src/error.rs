@@ -95,6 +95,19 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+
+    /// An output path names one of the command's inputs (see `OutputGuard`).
+    #[error("refusing to write {output}: it {relation} the input {input}; {fix}")]
+    OutputIsInput {
+        /// The output as the user gave it.
+        output: PathBuf,
+        /// The input it would replace.
+        input: PathBuf,
+        /// How they are the same file, e.g. `is a hard link to`.
+        relation: &'static str,
+        /// What to do instead.
+        fix: String,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -47,8 +47,9 @@ pub use error::{Error, Result};
 /// The faer version whose sparse and dense matrices this crate returns.
 pub use faer;
 pub use io::{
-    MeshFormat, PlyEncoding, atomic_write, read_mesh, read_mesh_bytes, read_point_cloud,
-    read_point_cloud_bytes, write_mesh, write_ply, write_point_cloud,
+    MeshFormat, OutputGuard, PlyEncoding, atomic_write, read_mesh, read_mesh_bytes,
+    read_point_cloud, read_point_cloud_bytes, remove_temporaries_on_interrupt, write_mesh,
+    write_ply, write_point_cloud,
 };
 pub use point_cloud::PointCloud;
 pub use primitives::{grid_plane, icosphere, subdivided_cube};

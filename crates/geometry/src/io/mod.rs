@@ -10,6 +10,7 @@ mod gltf;
 mod mesh_data;
 mod obj;
 mod off;
+mod output_guard;
 mod ply;
 mod read_mesh;
 mod read_point_cloud;
@@ -17,8 +18,9 @@ mod write_mesh;
 mod write_point_cloud;
 mod xyz;
 
-pub use atomic_write::atomic_write;
+pub use atomic_write::{atomic_write, remove_temporaries_on_interrupt};
 pub use format::MeshFormat;
+pub use output_guard::OutputGuard;
 pub use ply::PlyEncoding;
 pub use read_mesh::{read_mesh, read_mesh_bytes};
 pub use read_point_cloud::{read_point_cloud, read_point_cloud_bytes};
