@@ -5,9 +5,8 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use meshgnn_data::FolderDataset;
 use meshgnn_geometry::TriMesh;
+use meshgnn_models::{HandModel, check_registered};
 use rayon::prelude::*;
-
-use crate::model::{HandModel, check_topology};
 
 /// An opened registered dataset.
 pub struct Registered {
@@ -46,7 +45,7 @@ impl Registered {
             .map(|name| {
                 let mesh = self.dataset.load(name)?;
                 if let Some(m) = model {
-                    check_topology(m, &mesh, &self.dataset.root().join(name))?;
+                    check_registered(m, &mesh, &self.dataset.root().join(name))?;
                 }
                 Ok(mesh.vertices().to_vec())
             })

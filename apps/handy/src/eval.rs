@@ -1,7 +1,8 @@
 //! `handy eval`: thesis Table 3.2 and 3.5 on a registered dataset — generalisation (mean
 //! per-vertex error, mm) on the `test` and `children` splits, specificity, compactness and
 //! fitting to partial noisy scans, for Handy++ and a PCA of the same latent size fitted on the
-//! same `train` split.
+//! same `train` split. The protocol is `meshgnn_models::handy::evaluate_hand_model`; this
+//! module reads the data and prints the tables.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -9,17 +10,16 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::{TriMesh, sample_surface};
-use meshgnn_losses::metrics::{ErrorSummary, per_vertex_error};
-use meshgnn_models::{
-    LatentGaussian, MorphableModel, Pca, ScanFitOptions, fit_scan, generalisation_error,
-    latent_gaussian, partial_scan, scan_distances, specificity_error,
+use meshgnn_geometry::{MAX_SURFACE_SAMPLES, check_count};
+use meshgnn_losses::metrics::ErrorSummary;
+use meshgnn_models::handy::{
+    HandEvaluation, HandEvaluationOptions, HandSplits, evaluate_hand_model,
 };
-use rayon::prelude::*;
+use meshgnn_models::{MAX_FIT_STEPS, MAX_SPECIFICITY_SAMPLES, MorphableModel};
 use serde_json::{Value, json};
 
 use crate::dataset;
-use crate::model::{HandModel, load_model};
+use crate::model::load_model;
 
 /// Arguments of `handy eval`.
 #[derive(Args, Debug)]
@@ -55,15 +55,29 @@ pub struct EvalArgs {
     pub json: bool,
 }
 
-/// Parses `x,y,z`.
+/// Parses a camera direction `x,y,z`: the direction from the hand to the scanner, which
+/// decides which model vertices face the scanner. Its length does not matter but must not be
+/// zero: `0,0,0` (a camera at the hand's centre) gives no view direction, so no vertex would
+/// face it.
 pub fn parse_direction(text: &str) -> std::result::Result<[f32; 3], String> {
     let v: Vec<f32> = text
         .split(',')
         .map(|s| s.trim().parse::<f32>().map_err(|e| format!("{s}: {e}")))
         .collect::<std::result::Result<_, _>>()?;
     match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
-        _ => Err(format!("{text}: expected three numbers x,y,z")),
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => {
+            let length =
+                (f64::from(*x).powi(2) + f64::from(*y).powi(2) + f64::from(*z).powi(2)).sqrt();
+            if length > 1e-12 {
+                Ok([*x, *y, *z])
+            } else {
+                Err(format!(
+                    "{text}: the camera is a direction from the hand towards the scanner and \
+                     needs a non-zero length (e.g. 0,0,1): a zero vector gives no view direction"
+                ))
+            }
+        }
+        _ => Err(format!("{text}: expected three finite numbers x,y,z")),
     }
 }
 
@@ -71,49 +85,31 @@ fn summary(e: &ErrorSummary) -> Value {
     json!({"mean": e.mean, "std": e.std})
 }
 
-/// One fitting case: (partial noisy scan, clean complete surface samples, true vertices).
-type ScanCase = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[f32; 3]>);
-
-/// Table 3.5 figures of one model over the fitted scans (mm).
-#[derive(Default, Clone, Copy)]
-struct FitFigures {
-    r2s: f64,
-    s2r: f64,
-    vertex: f64,
-}
-
-fn fit_all(
-    model: &(dyn MorphableModel + Sync),
-    prior: &LatentGaussian,
-    scans: &[ScanCase],
-    options: &ScanFitOptions,
-    bar: &ProgressBar,
-) -> Result<FitFigures> {
-    // scans in parallel; each fit is deterministic and the sums run in scan order
-    let per_scan = scans
-        .par_iter()
-        .map(|(scan, surface, truth)| {
-            let fit = fit_scan(model, scan, Some(prior), options)?;
-            let d = scan_distances(&fit.vertices, surface)?;
-            let vertex = per_vertex_error(&fit.vertices, truth)?;
-            bar.inc(1);
-            Ok(FitFigures {
-                r2s: d.r2s,
-                s2r: d.s2r,
-                vertex,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let n = per_scan.len().max(1) as f64;
-    let sum = |f: fn(&FitFigures) -> f64| per_scan.iter().map(f).sum::<f64>() / n;
-    Ok(FitFigures {
-        r2s: sum(|f| f.r2s),
-        s2r: sum(|f| f.s2r),
-        vertex: sum(|f| f.vertex),
-    })
-}
-
 pub fn run(args: &EvalArgs) -> Result<()> {
+    check_count(
+        "--samples",
+        args.samples,
+        1..=MAX_SPECIFICITY_SAMPLES,
+        "decoded shapes for specificity",
+    )?;
+    check_count(
+        "--fit-steps",
+        args.fit_steps,
+        1..=MAX_FIT_STEPS,
+        "Adam steps per scan fit",
+    )?;
+    check_count(
+        "--scan-points",
+        args.scan_points,
+        3..=MAX_SURFACE_SAMPLES,
+        "surface samples per scan",
+    )?;
+    if !(args.scan_noise >= 0.0 && args.scan_noise.is_finite()) {
+        bail!(
+            "--scan-noise {}: must be a finite standard deviation >= 0 (mm)",
+            args.scan_noise
+        );
+    }
     let started = Instant::now();
     let loaded = load_model(args.model.as_deref())?;
     let ae = &loaded.model;
@@ -139,73 +135,54 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         loaded.source,
         train.len()
     );
-    let pca = HandModel::Pca(Box::new(Pca::fit(&data.template, &train, z)?));
-    let compactness = match &pca {
-        HandModel::Pca(p) => p.explained_variance_ratio(),
-        HandModel::Spiral(_) => Vec::new(),
+    let options = HandEvaluationOptions {
+        specificity_samples: args.samples,
+        fit_scans: args.fit_scans,
+        fit_steps: args.fit_steps,
+        scan_points: args.scan_points,
+        scan_noise: args.scan_noise,
+        camera: args.camera,
+        seed: args.seed,
     };
-
-    let ae_test = generalisation_error(ae, &test)?;
-    let pca_test = generalisation_error(&pca, &test)?;
-    let (ae_children, pca_children) = match &children {
-        Some(c) => (
-            Some(generalisation_error(ae, c)?),
-            Some(generalisation_error(&pca, c)?),
-        ),
+    let count = args.fit_scans.min(test.len());
+    let bar = ProgressBar::new(2 * count as u64);
+    if let Ok(style) = ProgressStyle::with_template("fitting scans {wide_bar} {pos}/{len}") {
+        bar.set_style(style);
+    }
+    let splits = HandSplits {
+        template: &data.template,
+        train: &train,
+        test: &test,
+        children: children.as_deref(),
+    };
+    let result = evaluate_hand_model(ae, &splits, &options, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let HandEvaluation {
+        test: (ae_test, pca_test),
+        children: children_errors,
+        specificity: (ae_spec, pca_spec),
+        compactness,
+        fitting: scan_fitting,
+        ..
+    } = result;
+    let (ae_children, pca_children) = match children_errors {
+        Some((a, p)) => (Some(a), Some(p)),
         None => (None, None),
     };
-    let ae_gauss = latent_gaussian(ae, &train)?;
-    let ae_spec = specificity_error(ae, &train, &ae_gauss, args.samples, args.seed)?;
-    let pca_spec = specificity_error(
-        &pca,
-        &train,
-        &LatentGaussian::standard(z),
-        args.samples,
-        args.seed,
-    )?;
-
-    // Table 3.5: partial noisy scans of the first test hands
-    let count = args.fit_scans.min(test.len());
     let mut fitting = Value::Null;
     let mut fit_rows = None;
-    if count > 0 {
-        let scans = test
-            .iter()
-            .take(count)
-            .enumerate()
-            .map(|(i, truth)| {
-                let mesh = TriMesh::new(truth.clone(), data.template.triangles().to_vec())?;
-                let seed = args.seed.wrapping_add(i as u64);
-                let scan =
-                    partial_scan(&mesh, args.camera, args.scan_points, args.scan_noise, seed)?;
-                let surface = sample_surface(&mesh, 30_000, seed)?.points;
-                Ok((scan, surface, truth.clone()))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let options = ScanFitOptions {
-            steps: args.fit_steps,
-            seed: args.seed,
-            view_direction: Some(args.camera),
-            ..Default::default()
-        };
-        let bar = ProgressBar::new(2 * count as u64);
-        if let Ok(style) = ProgressStyle::with_template("fitting scans {wide_bar} {pos}/{len}") {
-            bar.set_style(style);
-        }
-        let ae_fit = fit_all(ae, &ae_gauss, &scans, &options, &bar)?;
-        let pca_fit = fit_all(&pca, &LatentGaussian::standard(z), &scans, &options, &bar)?;
-        bar.finish_and_clear();
-        let mean_points = scans.iter().map(|s| s.0.len()).sum::<usize>() as f64 / count as f64;
+    if let Some(f) = scan_fitting {
+        let (ae_fit, pca_fit) = (f.model, f.pca);
         fitting = json!({
-            "scans": count,
-            "mean_scan_points": mean_points,
+            "scans": f.scans,
+            "mean_scan_points": f.mean_scan_points,
             "noise_mm": args.scan_noise,
             "camera": args.camera,
             "steps": args.fit_steps,
             "ae": {"r2s_mm": ae_fit.r2s, "s2r_mm": ae_fit.s2r, "per_vertex_mm": ae_fit.vertex},
             "pca": {"r2s_mm": pca_fit.r2s, "s2r_mm": pca_fit.s2r, "per_vertex_mm": pca_fit.vertex},
         });
-        fit_rows = Some((ae_fit, pca_fit, mean_points));
+        fit_rows = Some((ae_fit, pca_fit, f.mean_scan_points));
     }
 
     let at = |k: usize| compactness.get(k.saturating_sub(1)).copied();

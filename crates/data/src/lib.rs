@@ -22,7 +22,9 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod catmull_clark;
+mod count_bounds;
 mod error;
+mod expression_labels;
 mod expression_sequence;
 mod expressions;
 mod face_template;
@@ -31,14 +33,18 @@ mod hand_dataset;
 mod hand_pose;
 mod hand_shape;
 mod hand_template;
-mod pca_variance;
 mod preview;
 mod self_intersections;
 mod shapes;
 mod vec3;
 
 pub use catmull_clark::{QuadSubdivision, catmull_clark};
+pub use count_bounds::{
+    MAX_FACE_SUBJECTS, MAX_HAND_SUBJECTS, MAX_LIDAR_SCENES, MAX_PREVIEW_PIXELS,
+    MAX_SHAPE_RESOLUTION, MAX_SHAPES_PER_FAMILY,
+};
 pub use error::{Error, Result};
+pub use expression_labels::{ExpressionLabels, FrameLabel, SequenceStats};
 pub use expression_sequence::{
     FaceSequence, FaceSetConfig, FaceSubject, SequenceTiming, intensity_scale, intensity_scales,
 };
@@ -49,9 +55,9 @@ pub use hand_dataset::{CHILD_AGE, HandSample, HandSetConfig, hand_splits};
 pub use hand_pose::{FINGER_FLEXION_DEG, HandPose, OPPOSITION_DEG, SPREAD_DEG, THUMB_FLEXION_DEG};
 pub use hand_shape::{FINGER_NAMES, HandShape};
 pub use hand_template::{DEFAULT_HAND_SUBDIVISIONS, HandTemplate};
-pub use pca_variance::{components_for_variance, pca_explained_variance};
 pub use preview::{RgbImage, View, contact_sheet, encode_png, render_mesh, write_png};
 pub use self_intersections::{self_intersecting_pairs, self_intersections};
 pub use shapes::{
-    LidarConfig, ShapeFamily, lidar_scene, marching_tetrahedra, noisy_scan, shape_mesh,
+    LidarConfig, ShapeFamily, gaussian_noise, lidar_scene, marching_tetrahedra, noisy_scan,
+    shape_mesh,
 };

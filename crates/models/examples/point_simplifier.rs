@@ -60,7 +60,7 @@ fn main() -> AnyResult<()> {
     let ratio: f64 = arg(&args, "--ratio", 0.05);
     let model = match args.iter().position(|a| a == "--weights") {
         Some(i) => PointSimplifier::load(args.get(i + 1).ok_or("--weights needs a file")?)?,
-        None => PointSimplifier::pretrained()?,
+        None => meshgnn_models::pretrained::load("point_simplifier")?,
     };
     let mesh = shape_mesh(ShapeFamily::Fandisk, 7, 96)?;
     let cloud = sample_surface(&mesh, n, 1)?.points;

@@ -16,8 +16,9 @@ use meshgnn_data::{HandSetConfig, HandTemplate};
 use meshgnn_geometry::TriMesh;
 use meshgnn_models::MorphableModel;
 use meshgnn_models::spiral::{
-    SpiralAutoencoderConfig, TemplateTensors, TrainConfig, mesh_batch, train_spiral_model,
+    SpiralAutoencoderConfig, SpiralTraining, TemplateTensors, mesh_batch,
 };
+use meshgnn_models::training::{TrainingConfig, train};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -72,31 +73,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         train.len(),
         test.len()
     );
-    let train_config = TrainConfig {
+    let train_config = TrainingConfig {
         epochs,
         ..Default::default()
     };
-    let trained = train_spiral_model(
-        &template,
-        &config,
-        &train,
-        &test,
-        &train_config,
-        &device,
-        &mut |p| {
-            if p.epoch_end {
-                println!(
-                    "epoch {:3}/{}  train L1 {:.4}  train {:.3} mm  test {:.3} mm",
-                    p.epoch + 1,
-                    p.epochs,
-                    p.train_l1,
-                    p.train_mm,
-                    p.val_mm.unwrap_or(f64::NAN)
-                );
-            }
-        },
-    )?;
-    let model = trained.model;
+    let mut task = SpiralTraining::new(&template, &config, &train, &test, 0, &device)?;
+    let trained = train(&mut task, &train_config, &mut |p| {
+        if p.epoch_end {
+            println!(
+                "epoch {:3}/{}  train L1 {:.4}  train {:.3} mm  test {:.3} mm",
+                p.epoch + 1,
+                p.epochs,
+                p.loss,
+                p.figure.unwrap_or(f64::NAN),
+                p.validation.unwrap_or(f64::NAN)
+            );
+        }
+    })?;
+    let model = task.into_model();
     println!(
         "levels {:?}, trained in {:.1} s",
         model.template_tensors().vertex_counts(),

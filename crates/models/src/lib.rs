@@ -1,41 +1,44 @@
 //! # meshgnn-models
 //!
 //! The neural models of the thesis "Advances of Graph Neural Networks for 3D shape learning
-//! and analysis" on candle (CPU by default, `cuda` feature optional): the spiral-convolution
-//! hand autoencoder "Handy++" with its PCA baseline (ch. 3) and the learnable point-cloud
-//! simplifier (ch. 5), their layers, training loops, safetensors checkpoints and the bundled
-//! default weights.
+//! and analysis" on candle (CPU by default, `cuda` feature optional): the hand models of ch. 3
+//! (`handy`: the spiral-convolution autoencoder "Handy++" and its PCA baseline) and the
+//! learnable point-cloud simplifier of ch. 5 (`point_simplifier`, with the simplification
+//! methods it is compared with in `point_selection`).
 //!
-//! Models follow the candle-transformers layout: a config struct, `new(vb, &cfg)` and
-//! `forward`.
+//! One convention for every model (docs/architecture.md): a config struct, `new(vb, &cfg)` and
+//! `forward`; one training loop ([`training::train`] over a [`training::Trainable`]); one
+//! checkpoint layout ([`Checkpoint`], format [`CHECKPOINT_FORMAT`]); one folder of bundled
+//! weights loaded by name ([`pretrained::load`]).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod adam;
+mod checkpoint;
+mod count_bounds;
 mod error;
-mod latent_gaussian;
-mod latent_interpolation;
-mod morphable_evaluation;
-mod morphable_model;
-mod partial_scan;
-mod pca;
-mod scan_distances;
-mod scan_fitting;
-mod shape_batches;
 mod tensor_file;
 
+pub mod handy;
+pub mod point_selection;
 pub mod point_simplifier;
-pub mod spiral;
+pub mod pretrained;
+pub mod training;
 
 pub use adam::{Adam, AdamConfig, sorted_vars};
-pub use error::{Error, Result};
-pub use latent_gaussian::LatentGaussian;
-pub use latent_interpolation::interpolate_shapes;
-pub use morphable_evaluation::{
-    SPECIFICITY_SAMPLES, generalisation_error, latent_gaussian, specificity_error,
+pub use checkpoint::{
+    CHECKPOINT_FORMAT, Checkpoint, CheckpointHeader, LoadCheckpoint, OPTIMIZER_PREFIX,
+    TrainingState,
 };
-pub use morphable_model::MorphableModel;
-pub use partial_scan::partial_scan;
-pub use pca::{PCA_FORMAT, Pca};
-pub use scan_distances::{ScanDistances, scan_distances};
-pub use scan_fitting::{ChamferDirection, ScanFit, ScanFitOptions, SimilarityTransform, fit_scan};
-pub use shape_batches::{BATCH_SHAPES, decode_latents, encode_shapes, reconstruct_shapes};
+pub use count_bounds::{
+    MAX_BATCH_SIZE, MAX_CLOUDS_PER_SHAPE, MAX_DECODED_SHAPES, MAX_EPOCHS, MAX_FIT_STEPS,
+    MAX_LATENT_SIZE, MAX_SPECIFICITY_SAMPLES, MAX_TRAINING_CLOUD_POINTS,
+};
+pub use error::{Error, Result};
+pub use handy::spiral;
+pub use handy::{
+    BATCH_SHAPES, ChamferDirection, HandModel, LATENT_GAUSSIAN_KEY, LatentGaussian,
+    LoadedHandModel, MorphableModel, PCA_MODEL_NAME, Pca, SPECIFICITY_SAMPLES, ScanDistances,
+    ScanFit, ScanFitOptions, SimilarityTransform, check_registered, decode_latents, encode_shapes,
+    fit_scan, generalisation_error, interpolate_shapes, latent_gaussian, partial_scan,
+    reconstruct_shapes, scan_distances, specificity_error,
+};

@@ -1,203 +1,120 @@
-//! Safetensors checkpoints of the point simplifier: the weights under their stable names, the
-//! [`PointSimplifierConfig`] and the training position in the header metadata (string pairs),
-//! and — for resumable training — the optimiser moments under `optimizer.{m,v}.<name>`.
-//! Files are written atomically (temporary file in the same folder, then rename).
+//! The point simplifier in the crate's checkpoint layout ([`crate::Checkpoint`]): the weights
+//! and batch-norm statistics under their stable names, the [`PointSimplifierConfig`] entries as
+//! the header's `config`. Files of the earlier `meshgnn-point-simplifier/1` layout (the bundled
+//! weights) load unchanged.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
+use serde_json::{Map, Value};
 
 use super::{PointSimplifier, PointSimplifierConfig};
-use crate::{Error, Result};
+use crate::checkpoint::{checkpoint_error, read_file};
+use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
 
-/// Value of the `format` metadata key.
-const FORMAT: &str = "meshgnn-point-simplifier/1";
+/// The model's name in checkpoints.
+pub const POINT_SIMPLIFIER_NAME: &str = "point_simplifier";
 
-/// Prefix of optimiser-state tensors (ignored when loading a model for inference).
-pub(crate) const OPTIMIZER_PREFIX: &str = "optimizer.";
+impl PointSimplifierConfig {
+    /// A checkpoint header of this config (no training state).
+    pub fn header(&self) -> CheckpointHeader {
+        let config: Map<String, Value> = self
+            .entries()
+            .iter()
+            .map(|(k, v)| ((*k).to_string(), Value::from(*v)))
+            .collect();
+        CheckpointHeader::new(POINT_SIMPLIFIER_NAME, config)
+    }
 
-/// Where training stood when a checkpoint was written.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CheckpointState {
-    /// Epochs completed.
-    pub epoch: usize,
-    /// Optimiser steps taken.
-    pub step: u64,
-    /// The training seed.
-    pub seed: u64,
-    /// Mean loss of the last completed epoch.
-    pub loss: f64,
-    /// Lowest validation loss recorded so far ([`super::Trainer::record_validation`]), if any.
-    pub best_validation: Option<f64>,
-}
-
-/// A decoded checkpoint.
-#[derive(Clone, Debug)]
-pub struct Checkpoint {
-    /// Every stored tensor by name (weights, batch-norm statistics, optimiser moments).
-    pub tensors: HashMap<String, Tensor>,
-    /// The model's hyper-parameters.
-    pub config: PointSimplifierConfig,
-    /// The training position, when the file was written by training.
-    pub state: Option<CheckpointState>,
-}
-
-/// Writes `tensors` with `config` and `state` to `path` atomically.
-///
-/// ```
-/// use candle_core::{Device, Tensor};
-/// use meshgnn_models::point_simplifier::{PointSimplifierConfig, read_checkpoint, write_checkpoint};
-/// let dir = tempfile::tempdir()?;
-/// let path = dir.path().join("w.safetensors");
-/// let t = Tensor::new(&[1.0f32, 2.0], &Device::Cpu)?;
-/// write_checkpoint(&path, &[("a".to_string(), t)], &PointSimplifierConfig::default(), None)?;
-/// let c = read_checkpoint(&std::fs::read(&path)?, &path)?;
-/// assert_eq!(c.config.hidden, 64);
-/// assert_eq!(c.tensors["a"].to_vec1::<f32>()?, vec![1.0, 2.0]);
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-pub fn write_checkpoint(
-    path: &Path,
-    tensors: &[(String, Tensor)],
-    config: &PointSimplifierConfig,
-    state: Option<&CheckpointState>,
-) -> Result<()> {
-    let fail = |reason: String| Error::Checkpoint {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let mut meta: HashMap<String, String> = config
-        .entries()
-        .iter()
-        .map(|(k, v)| ((*k).to_string(), v.to_string()))
-        .collect();
-    meta.insert("format".into(), FORMAT.into());
-    if let Some(s) = state {
-        meta.insert("epoch".into(), s.epoch.to_string());
-        meta.insert("step".into(), s.step.to_string());
-        meta.insert("seed".into(), s.seed.to_string());
-        meta.insert("loss".into(), format!("{:e}", s.loss));
-        if let Some(v) = s.best_validation {
-            meta.insert("best_validation".into(), format!("{v:e}"));
+    /// The config stored in `header` (read from `source`); errors when the header is another
+    /// model's or an entry is missing.
+    pub fn from_header(header: &CheckpointHeader, source: &Path) -> Result<Self> {
+        header.expect_model(POINT_SIMPLIFIER_NAME, source)?;
+        let mut config = Self::default();
+        let keys: Vec<&'static str> = config.entries().iter().map(|e| e.0).collect();
+        for key in keys {
+            let value = header.config_count(key, source)?;
+            config.set_entry(key, value);
         }
+        Ok(config)
     }
-    let contiguous = tensors
-        .iter()
-        .map(|(k, t)| Ok((k.clone(), t.contiguous()?)))
-        .collect::<Result<Vec<_>>>()?;
-    let bytes = safetensors::serialize(contiguous.iter().map(|(k, t)| (k.as_str(), t)), Some(meta))
-        .map_err(|e| fail(format!("cannot serialise: {e}")))?;
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "checkpoint".into());
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, &bytes)
-        .map_err(|e| fail(format!("cannot write {}: {e}", tmp.display())))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(format!("cannot rename the temporary file into place: {e}"))
-    })
-}
-
-/// Decodes a checkpoint from `bytes` (`path` names it in errors). Errors when the header or a
-/// config field is missing or malformed.
-pub fn read_checkpoint(bytes: &[u8], path: &Path) -> Result<Checkpoint> {
-    let fail = |reason: String| Error::Checkpoint {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let (_, header) = safetensors::SafeTensors::read_metadata(bytes)
-        .map_err(|e| fail(format!("not a safetensors file: {e}")))?;
-    let meta = header
-        .metadata()
-        .clone()
-        .ok_or_else(|| fail("no metadata: not a point-simplifier checkpoint".into()))?;
-    if meta.get("format").map(String::as_str) != Some(FORMAT) {
-        return Err(fail(format!(
-            "format {:?}, expected {FORMAT:?}",
-            meta.get("format")
-        )));
-    }
-    let get = |key: &str| -> Result<&String> {
-        meta.get(key)
-            .ok_or_else(|| fail(format!("metadata key {key:?} is missing")))
-    };
-    let num = |key: &str| -> Result<usize> {
-        get(key)?
-            .parse()
-            .map_err(|e| fail(format!("metadata {key:?} is not a count: {e}")))
-    };
-    let config = PointSimplifierConfig {
-        hidden: num("hidden")?,
-        mlp_layers: num("mlp_layers")?,
-        gnn_neighbours: num("gnn_neighbours")?,
-        refine_neighbours: num("refine_neighbours")?,
-        attention_dim: num("attention_dim")?,
-        phi_hidden: num("phi_hidden")?,
-        gamma_hidden: num("gamma_hidden")?,
-    };
-    let state = if meta.contains_key("epoch") {
-        let parse_u64 = |key: &str| -> Result<u64> {
-            get(key)?
-                .parse()
-                .map_err(|e| fail(format!("metadata {key:?}: {e}")))
-        };
-        Some(CheckpointState {
-            epoch: num("epoch")?,
-            step: parse_u64("step")?,
-            seed: parse_u64("seed")?,
-            loss: get("loss")?
-                .parse()
-                .map_err(|e| fail(format!("metadata \"loss\": {e}")))?,
-            best_validation: meta
-                .get("best_validation")
-                .map(|v| v.parse())
-                .transpose()
-                .map_err(|e| fail(format!("metadata \"best_validation\": {e}")))?,
-        })
-    } else {
-        None
-    };
-    let tensors = candle_core::safetensors::load_buffer(bytes, &Device::Cpu)
-        .map_err(|e| fail(format!("cannot decode the tensors: {e}")))?;
-    Ok(Checkpoint {
-        tensors,
-        config,
-        state,
-    })
 }
 
 impl PointSimplifier {
-    /// The model stored in safetensors `bytes` (`path` names it in errors), on the CPU, with
-    /// plain (non-trainable) tensors: inference builds no autograd graph.
-    pub fn from_safetensors(bytes: &[u8], path: &Path) -> Result<Self> {
-        let checkpoint = read_checkpoint(bytes, path)?;
-        let weights: HashMap<String, Tensor> = checkpoint
-            .tensors
-            .into_iter()
-            .filter(|(k, _)| !k.starts_with(OPTIMIZER_PREFIX))
-            .collect();
+    /// The model in `checkpoint` (read from `source`), on the CPU, with plain (non-trainable)
+    /// tensors: inference builds no autograd graph.
+    pub fn from_checkpoint(checkpoint: &Checkpoint, source: &Path) -> Result<Self> {
+        let config = PointSimplifierConfig::from_header(&checkpoint.header, source)?;
+        let weights: HashMap<String, Tensor> = checkpoint.model_tensors();
         let vb = VarBuilder::from_tensors(weights, DType::F32, &Device::Cpu);
-        Self::new(vb, &checkpoint.config).map_err(|e| Error::Checkpoint {
-            path: path.to_path_buf(),
+        Self::new(vb, &config).map_err(|e| Error::Checkpoint {
+            path: source.to_path_buf(),
             reason: format!("does not hold a complete model: {e}"),
         })
     }
 
-    /// Loads a checkpoint file written by training ([`write_checkpoint`]).
+    /// The model stored in safetensors `bytes` (`path` names it in errors).
+    pub fn from_safetensors(bytes: &[u8], path: &Path) -> Result<Self> {
+        Self::from_checkpoint(&Checkpoint::from_bytes(bytes, path)?, path)
+    }
+
+    /// Loads a checkpoint file written by training ([`crate::training::train`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| Error::Checkpoint {
-            path: path.to_path_buf(),
-            reason: format!("cannot read: {e}"),
-        })?;
+        let bytes = read_file(path)?;
         Self::from_safetensors(&bytes, path)
+    }
+}
+
+impl LoadCheckpoint for PointSimplifier {
+    fn from_checkpoint_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
+        Self::from_safetensors(bytes, source).map_err(|e| match e {
+            Error::Checkpoint { .. } => e,
+            other => checkpoint_error(source, other.to_string()),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use candle_nn::VarMap;
+
+    #[test]
+    fn the_config_round_trips_through_the_header_and_a_file() {
+        let config = PointSimplifierConfig {
+            hidden: 8,
+            attention_dim: 4,
+            ..Default::default()
+        };
+        let header = config.header();
+        let back = PointSimplifierConfig::from_header(&header, Path::new("h")).unwrap();
+        assert_eq!(back, config);
+        let map = VarMap::new();
+        let model = PointSimplifier::new(
+            VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu),
+            &config,
+        )
+        .unwrap();
+        let tensors = crate::sorted_vars(&map)
+            .into_iter()
+            .map(|(n, v)| (n, v.as_detached_tensor()))
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("w.safetensors");
+        Checkpoint { header, tensors }.save(&path).unwrap();
+        let loaded = PointSimplifier::load(&path).unwrap();
+        assert_eq!(loaded.config(), model.config());
+        let err = PointSimplifier::load(dir.path().join("none.safetensors")).unwrap_err();
+        assert!(err.to_string().contains("none.safetensors"), "{err}");
+    }
+
+    #[test]
+    fn another_models_checkpoint_is_refused() {
+        let header = CheckpointHeader::new("pca", Map::new());
+        let err = PointSimplifierConfig::from_header(&header, Path::new("p.st")).unwrap_err();
+        assert!(err.to_string().contains("holds a pca model"), "{err}");
     }
 }

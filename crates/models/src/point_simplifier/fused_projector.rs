@@ -217,7 +217,7 @@ mod tests {
 
     #[test]
     fn fused_projector_equals_candle_projector_on_bundled_weights() {
-        let model = PointSimplifier::pretrained().unwrap();
+        let model = crate::pretrained::load::<PointSimplifier>("point_simplifier").unwrap();
         let mut rng = StdRng::seed_from_u64(3);
         let points: Vec<[f32; 3]> = (0..5000)
             .map(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)))
@@ -256,7 +256,7 @@ mod tests {
 
     #[test]
     fn fused_projector_rejects_a_graph_over_other_points() {
-        let model = PointSimplifier::pretrained().unwrap();
+        let model = crate::pretrained::load::<PointSimplifier>("point_simplifier").unwrap();
         let fused = model.fused_projector(false).unwrap().unwrap();
         let graph = NeighbourIndex::from_rows(&[vec![1], vec![0]], &Device::Cpu).unwrap();
         assert!(fused.project(&[[0.0; 3]; 3], &graph).is_err());

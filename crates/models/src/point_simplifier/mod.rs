@@ -1,5 +1,6 @@
-//! The learnable point-cloud simplifier of thesis ch. 5: layers, model, selector, loss,
-//! training loop, checkpoints and the bundled default weights. See `docs/pcsimplify_model.md`.
+//! The learnable point-cloud simplifier of thesis ch. 5: layers, model, selector, loss, what
+//! it trains and its checkpoints. See `docs/pcsimplify_model.md`; the bundled default
+//! weights load with `crate::pretrained::load("point_simplifier")`.
 
 mod attention_refinement;
 mod checkpoint;
@@ -10,14 +11,13 @@ mod neighbour_index;
 mod point_mlp;
 #[allow(clippy::module_inception)]
 mod point_simplifier;
-mod pretrained;
 mod refinement_graph;
 mod simplifier_loss;
+mod simplifier_training;
 mod simplify;
-mod training;
 
 pub use attention_refinement::AttentionRefinement;
-pub use checkpoint::{Checkpoint, CheckpointState, read_checkpoint, write_checkpoint};
+pub use checkpoint::POINT_SIMPLIFIER_NAME;
 pub use latent_sampling::{LatentSamplingOptions, latent_farthest_point_sampling};
 pub use mean_aggregation_gnn::MeanAggregationGnn;
 pub use neighbour_index::NeighbourIndex;
@@ -25,11 +25,10 @@ pub use point_mlp::PointMlp;
 pub use point_simplifier::{
     PointSimplifier, PointSimplifierConfig, SimplifierOutput, StageTimings,
 };
-pub use pretrained::PRETRAINED_WEIGHTS;
 pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_indexed};
 pub use simplifier_loss::{CURVATURE_LOSS_WEIGHT, SimplifierLoss, simplifier_loss};
-pub use simplify::{Simplification, SimplifyOptions};
-pub use training::{
-    Trainer, TrainingConfig, TrainingProgress, TrainingSample, VALIDATION_RATIOS,
+pub use simplifier_training::{
+    SimplifierObjective, SimplifierTraining, TrainingSample, VALIDATION_RATIOS,
     prepare_training_sample,
 };
+pub use simplify::{Simplification, SimplifyOptions};

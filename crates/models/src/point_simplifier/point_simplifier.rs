@@ -70,6 +70,22 @@ impl PointSimplifierConfig {
             ("gamma_hidden", self.gamma_hidden),
         ]
     }
+
+    /// Sets the field `name` of [`PointSimplifierConfig::entries`] (unknown names are ignored:
+    /// the callers iterate over `entries`).
+    pub(crate) fn set_entry(&mut self, name: &str, value: usize) {
+        let field = match name {
+            "hidden" => &mut self.hidden,
+            "mlp_layers" => &mut self.mlp_layers,
+            "gnn_neighbours" => &mut self.gnn_neighbours,
+            "refine_neighbours" => &mut self.refine_neighbours,
+            "attention_dim" => &mut self.attention_dim,
+            "phi_hidden" => &mut self.phi_hidden,
+            "gamma_hidden" => &mut self.gamma_hidden,
+            _ => return,
+        };
+        *field = value;
+    }
 }
 
 /// Wall-clock time of each stage of one simplification (the thesis' ch. 5.5 speed split).

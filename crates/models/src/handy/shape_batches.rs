@@ -3,7 +3,7 @@
 
 use candle_core::{Device, Tensor};
 
-use crate::morphable_model::MorphableModel;
+use crate::handy::morphable_model::MorphableModel;
 use crate::tensor_file::{flatten_points, unflatten_points};
 use crate::{Error, Result};
 

@@ -3,7 +3,7 @@
 use candle_core::{Device, Tensor};
 
 use crate::Result;
-use crate::spiral::vertex_normalization::check_meshes;
+use crate::handy::spiral::vertex_normalization::check_meshes;
 
 /// Stacks `meshes: #B × (#V×3)` (same vertex count, finite coordinates) into `(B, V, 3)`.
 ///

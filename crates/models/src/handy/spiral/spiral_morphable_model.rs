@@ -3,14 +3,13 @@
 //! together in one self-contained safetensors file. Encodes and decodes in data units
 //! (millimetres for the synthetic hands).
 //!
-//! # File format (safetensors)
-//! - Tensors: the network parameters (names in [`crate::spiral::SpiralAutoencoder`]'s docs),
-//!   `normalization.mean` / `normalization.std` `(V, 3)` f32, and the template under
-//!   `template.` (table in [`crate::spiral::TemplateTensors`]'s docs).
-//! - Metadata: one entry `meshgnn`, a JSON object (sorted keys, so the bytes are
-//!   deterministic) with `format` = [`SPIRAL_MODEL_FORMAT`], `config` = the
-//!   [`SpiralAutoencoderConfig`], and for training checkpoints `training` (JSON string of the
-//!   [`crate::spiral::TrainingState`]). `load_with_metadata` returns these entries as strings.
+//! # File format: a [`crate::Checkpoint`] of model [`SPIRAL_MODEL_NAME`]
+//! - Tensors: the network parameters (names in [`crate::handy::spiral::SpiralAutoencoder`]'s
+//!   docs), `normalization.mean` / `normalization.std` `(V, 3)` f32, and the template under
+//!   `template.` (table in [`crate::handy::spiral::TemplateTensors`]'s docs).
+//! - Header: `config` = the [`SpiralAutoencoderConfig`]; training checkpoints add the
+//!   training state, `handy` adds the latent Gaussian as an entry. Files of the earlier
+//!   `meshgnn.spiral_morphable_model.v1` layout (the bundled Handy++) load unchanged.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -19,16 +18,15 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 
-use crate::spiral::{
+use crate::handy::spiral::{
     SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
     seeded_initialization,
 };
-use crate::{Error, MorphableModel, Result};
+use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, MorphableModel, Result};
 
-/// The `format` metadata value of a spiral morphable model file.
-pub const SPIRAL_MODEL_FORMAT: &str = "meshgnn.spiral_morphable_model.v1";
+/// The model's name in checkpoints.
+pub const SPIRAL_MODEL_NAME: &str = "spiral_morphable_model";
 
-const METADATA_KEY: &str = "meshgnn";
 const TEMPLATE_PREFIX: &str = "template.";
 const MEAN: &str = "normalization.mean";
 const STD: &str = "normalization.std";
@@ -157,9 +155,9 @@ impl SpiralMorphableModel {
         self.decode(&self.encode(vertices)?)
     }
 
-    /// The model file's bytes (format in the module docs), with `metadata` entries added
-    /// (`format` and `config` are reserved and always written by the model).
-    pub fn to_bytes(&self, metadata: &[(&str, String)]) -> Result<Vec<u8>> {
+    /// The model as a checkpoint ([`crate::Checkpoint`]): the network's parameters, the
+    /// normalisation, the template tensors, and the config as the header's `config`.
+    pub fn to_checkpoint(&self) -> Result<Checkpoint> {
         let mut tensors = self.template.to_named_tensors(TEMPLATE_PREFIX)?;
         tensors.insert(
             MEAN.into(),
@@ -172,56 +170,37 @@ impl SpiralMorphableModel {
         for (name, var) in lock(&self.vars)?.iter() {
             tensors.insert(name.clone(), var.as_tensor().to_device(&Device::Cpu)?);
         }
-        let config = serde_json::to_value(&self.config).map_err(|e| Error::Invalid {
-            what: "model config".into(),
-            reason: format!("cannot serialise: {e}"),
-        })?;
-        // One metadata entry holding a sorted JSON object, so the file bytes are deterministic.
-        // `format` and `config` are inserted last: an extra entry cannot replace them.
-        let mut entries = serde_json::Map::new();
-        for (k, v) in metadata {
-            entries.insert((*k).to_string(), v.clone().into());
-        }
-        entries.insert("format".into(), SPIRAL_MODEL_FORMAT.into());
-        entries.insert("config".into(), config);
-        let info = HashMap::from([(
-            METADATA_KEY.to_string(),
-            serde_json::Value::Object(entries).to_string(),
-        )]);
-        safetensors::tensor::serialize(tensors, Some(info)).map_err(|e| Error::Invalid {
-            what: "model file".into(),
-            reason: format!("cannot serialise: {e}"),
+        let config = match serde_json::to_value(&self.config) {
+            Ok(serde_json::Value::Object(config)) => config,
+            Ok(_) => serde_json::Map::new(),
+            Err(e) => {
+                return Err(Error::Invalid {
+                    what: "model config".into(),
+                    reason: format!("cannot serialise: {e}"),
+                });
+            }
+        };
+        Ok(Checkpoint {
+            header: CheckpointHeader::new(SPIRAL_MODEL_NAME, config),
+            tensors,
         })
+    }
+
+    /// The model file's bytes (a checkpoint without training state; deterministic).
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        self.to_checkpoint()?.to_bytes()
     }
 
     /// Writes the model to `path` atomically (temporary file + rename).
     pub fn save(&self, path: &Path) -> Result<()> {
-        self.save_with_metadata(path, &[])
+        self.to_checkpoint()?.save(path)
     }
 
-    /// [`SpiralMorphableModel::save`] with extra metadata entries (e.g. training state).
-    pub fn save_with_metadata(&self, path: &Path, metadata: &[(&str, String)]) -> Result<()> {
-        let bytes = self.to_bytes(metadata).map_err(|e| checkpoint(path, e))?;
-        meshgnn_geometry::atomic_write(path, &bytes)?;
-        Ok(())
-    }
-
-    /// Reads a model written by [`SpiralMorphableModel::save`] onto `device`; errors name the
-    /// file and the missing or malformed tensor.
+    /// Reads a model checkpoint (any layout [`CheckpointHeader::from_bytes`] reads) onto
+    /// `device`; errors name the file and the missing or malformed tensor.
     pub fn load(path: &Path, device: &Device) -> Result<Self> {
-        Ok(Self::load_with_metadata(path, device)?.0)
-    }
-
-    /// [`SpiralMorphableModel::load`], also returning the file's metadata.
-    pub fn load_with_metadata(
-        path: &Path,
-        device: &Device,
-    ) -> Result<(Self, HashMap<String, String>)> {
-        let bytes = std::fs::read(path).map_err(|e| Error::Checkpoint {
-            path: path.to_path_buf(),
-            reason: format!("cannot read: {e}"),
-        })?;
-        Self::from_bytes_with_metadata(&bytes, device).map_err(|e| checkpoint(path, e))
+        let bytes = crate::checkpoint::read_file(path)?;
+        Self::decode(&bytes, path, device).map_err(|e| checkpoint_of(path, e))
     }
 
     /// A model from the bytes of a model file (e.g. weights embedded with `include_bytes!`).
@@ -235,61 +214,42 @@ impl SpiralMorphableModel {
     ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
     /// let norm = VertexNormalization::fit(&[sphere.vertices().to_vec()], &Device::Cpu)?;
     /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, 0, &Device::Cpu)?;
-    /// let copy = SpiralMorphableModel::from_bytes(&model.to_bytes(&[])?, &Device::Cpu)?;
+    /// let copy = SpiralMorphableModel::from_bytes(&model.to_bytes()?, &Device::Cpu)?;
     /// let z = Tensor::ones((1, 8), candle_core::DType::F32, &Device::Cpu)?;
     /// let (a, b) = (model.decode(&z)?, copy.decode(&z)?);
     /// assert_eq!(a.flatten_all()?.to_vec1::<f32>()?, b.flatten_all()?.to_vec1::<f32>()?);
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
     pub fn from_bytes(bytes: &[u8], device: &Device) -> Result<Self> {
-        Ok(Self::from_bytes_with_metadata(bytes, device)?.0)
+        Self::decode(bytes, Path::new("model file"), device)
     }
 
-    /// [`SpiralMorphableModel::from_bytes`], also returning the file's metadata.
-    pub fn from_bytes_with_metadata(
-        bytes: &[u8],
+    /// The model in `bytes` read from `source`.
+    fn decode(bytes: &[u8], source: &Path, device: &Device) -> Result<Self> {
+        let checkpoint = Checkpoint::from_bytes(bytes, source)?;
+        Self::from_checkpoint(&checkpoint, source, device)
+    }
+
+    /// The model stored in `checkpoint` (read from `source`), on `device`.
+    pub fn from_checkpoint(
+        checkpoint: &Checkpoint,
+        source: &Path,
         device: &Device,
-    ) -> Result<(Self, HashMap<String, String>)> {
+    ) -> Result<Self> {
+        checkpoint.header.expect_model(SPIRAL_MODEL_NAME, source)?;
         let invalid = |reason: String| Error::Invalid {
             what: "model file".into(),
             reason,
         };
-        let (_, header) = safetensors::SafeTensors::read_metadata(bytes)
-            .map_err(|e| invalid(format!("not a safetensors file: {e}")))?;
-        let metadata: HashMap<String, String> = header
-            .metadata()
-            .as_ref()
-            .and_then(|m| m.get(METADATA_KEY))
-            .and_then(|json| {
-                serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(json).ok()
-            })
-            .map(|entries| {
-                entries
-                    .into_iter()
-                    .map(|(k, v)| match v {
-                        serde_json::Value::String(s) => (k, s),
-                        other => (k, other.to_string()),
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
-        match metadata.get("format") {
-            Some(f) if f == SPIRAL_MODEL_FORMAT => {}
-            other => {
-                return Err(invalid(format!(
-                    "format {other:?}, expected {SPIRAL_MODEL_FORMAT:?}"
-                )));
-            }
-        }
-        let config: SpiralAutoencoderConfig = metadata
-            .get("config")
-            .ok_or_else(|| invalid("no `config` metadata".into()))
-            .and_then(|c| {
-                serde_json::from_str(c).map_err(|e| invalid(format!("bad `config`: {e}")))
-            })?;
+        let config: SpiralAutoencoderConfig =
+            serde_json::from_value(serde_json::Value::Object(checkpoint.header.config.clone()))
+                .map_err(|e| invalid(format!("bad `config`: {e}")))?;
         config.validate(None)?;
-        let tensors = candle_core::safetensors::load_buffer(bytes, device)
-            .map_err(|e| invalid(format!("unreadable tensors: {e}")))?;
+        let tensors: HashMap<String, Tensor> = checkpoint
+            .model_tensors()
+            .into_iter()
+            .map(|(k, t)| Ok((k, t.to_device(device)?)))
+            .collect::<Result<_>>()?;
         let template = TemplateTensors::from_named_tensors(&tensors, TEMPLATE_PREFIX, device)?;
         let get = |name: &str| {
             tensors.get(name).cloned().ok_or_else(|| Error::Invalid {
@@ -315,7 +275,14 @@ impl SpiralMorphableModel {
             }
             var.set(&value)?;
         }
-        Ok((model, metadata))
+        Ok(model)
+    }
+}
+
+impl LoadCheckpoint for SpiralMorphableModel {
+    /// On the CPU.
+    fn from_checkpoint_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
+        Self::decode(bytes, source, &Device::Cpu).map_err(|e| checkpoint_of(source, e))
     }
 }
 
@@ -357,7 +324,7 @@ fn lock(vars: &VarMap) -> Result<std::sync::MutexGuard<'_, HashMap<String, candl
     })
 }
 
-fn checkpoint(path: &Path, error: Error) -> Error {
+fn checkpoint_of(path: &Path, error: Error) -> Error {
     match error {
         Error::Checkpoint { .. } => error,
         other => Error::Checkpoint {
@@ -370,8 +337,8 @@ fn checkpoint(path: &Path, error: Error) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spiral::mesh_batch;
-    use crate::spiral::test_fixtures::{deformed_shapes, tiny_config};
+    use crate::handy::spiral::mesh_batch;
+    use crate::handy::spiral::test_fixtures::{deformed_shapes, tiny_config};
 
     fn model(seed: u64) -> (SpiralMorphableModel, Tensor) {
         let sphere = meshgnn_geometry::icosphere(2);
@@ -416,13 +383,13 @@ mod tests {
             values(&m.encode(&x).unwrap())
         );
         // Saving is deterministic.
-        assert_eq!(m.to_bytes(&[]).unwrap(), back.to_bytes(&[]).unwrap());
+        assert_eq!(m.to_bytes().unwrap(), back.to_bytes().unwrap());
     }
 
     #[test]
     fn missing_or_malformed_tensors_are_named() {
         let (m, _) = model(0);
-        let bytes = m.to_bytes(&[]).unwrap();
+        let bytes = m.to_bytes().unwrap();
         let parsed = safetensors::SafeTensors::deserialize(&bytes).unwrap();
         let metadata = safetensors::SafeTensors::read_metadata(&bytes)
             .unwrap()

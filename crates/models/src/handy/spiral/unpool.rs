@@ -6,7 +6,7 @@
 
 use candle_core::{Device, Tensor};
 
-use crate::spiral::pool::check_vertices;
+use crate::handy::spiral::pool::check_vertices;
 use crate::{Error, Result};
 
 /// Up-sampling `U: N×M` stored as three weighted gathers per fine vertex
@@ -106,7 +106,7 @@ impl Unpool {
 
 #[cfg(test)]
 mod tests {
-    use crate::spiral::TemplateTensors;
+    use crate::handy::spiral::TemplateTensors;
     use candle_core::{Device, Tensor};
     use meshgnn_graph::HierarchyOptions;
 
@@ -161,6 +161,6 @@ mod tests {
         assert!(
             super::Unpool::new(&[[0, 1, 2]], &[[f32::NAN, 0.3, 0.5]], 3, &Device::Cpu).is_err()
         );
-        assert!(crate::spiral::Pool::new(&[0, 3], 3, &Device::Cpu).is_err());
+        assert!(crate::handy::spiral::Pool::new(&[0, 3], 3, &Device::Cpu).is_err());
     }
 }

@@ -1,7 +1,7 @@
 //! Fitting a morphable model to a point cloud (thesis ch. 3.4.4, Table 3.5): a latent code and
 //! a similarity transform are optimised with Adam to minimise the Chamfer distance (eq. 5.6)
 //! between the decoded, transformed template vertices and the scan. Following LISA (Corona et
-//! al. 2022, CVPR), the fit is evaluated with R2S and S2R ([`crate::scan_distances`]).
+//! al. 2022, CVPR), the fit is evaluated with R2S and S2R ([`crate::handy::scan_distances`]).
 //!
 //! # Conventions
 //! - Model space → scan space: `y = s R (x − c) + t`, `c` the centroid of the model's mean
@@ -23,10 +23,10 @@ use meshgnn_graph::{knn_query, uniform_sampling};
 use meshgnn_losses::losses::chamfer_loss;
 
 use crate::adam::{Adam, AdamConfig};
-use crate::latent_gaussian::LatentGaussian;
-use crate::morphable_evaluation::rms_radius;
-use crate::morphable_model::MorphableModel;
-use crate::scan_distances::{ScanDistances, scan_distances};
+use crate::handy::latent_gaussian::LatentGaussian;
+use crate::handy::morphable_evaluation::rms_radius;
+use crate::handy::morphable_model::MorphableModel;
+use crate::handy::scan_distances::{ScanDistances, scan_distances};
 use crate::tensor_file::{flatten_points, unflatten_points};
 use crate::{Error, Result};
 
@@ -520,7 +520,7 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pca::Pca;
+    use crate::handy::pca::Pca;
     use meshgnn_geometry::icosphere;
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
@@ -563,7 +563,7 @@ mod tests {
     fn recovers_a_known_code_and_similarity_transform() {
         let pca = model();
         let truth_z = [0.9f32, -0.7, 0.5];
-        let x = crate::shape_batches::decode_latents(&pca, &[truth_z.to_vec()]).unwrap();
+        let x = crate::handy::shape_batches::decode_latents(&pca, &[truth_z.to_vec()]).unwrap();
         let truth = SimilarityTransform::from_axis_angle(
             1.15,
             [1.0, 2.0, 3.0],
@@ -622,13 +622,14 @@ mod tests {
         // a one-sided scan of the model's own mean shape, moved: with the view direction the
         // fit starts at the visible part and lands on the shape
         let pca = model();
-        let mean = crate::shape_batches::decode_latents(&pca, &[vec![0.0; 3]]).unwrap();
+        let mean = crate::handy::shape_batches::decode_latents(&pca, &[vec![0.0; 3]]).unwrap();
         let truth: Vec<[f32; 3]> = mean[0]
             .iter()
             .map(|p| [p[0] + 0.3, p[1] - 0.2, p[2] + 0.1])
             .collect();
         let mesh = TriMesh::new(truth.clone(), pca.template().triangles().to_vec()).unwrap();
-        let scan = crate::partial_scan::partial_scan(&mesh, [0.0, 0.0, 1.0], 6000, 0.0, 2).unwrap();
+        let scan =
+            crate::handy::partial_scan::partial_scan(&mesh, [0.0, 0.0, 1.0], 6000, 0.0, 2).unwrap();
         let opts = ScanFitOptions {
             view_direction: Some([0.0, 0.0, 1.0]),
             fit_scale: false,

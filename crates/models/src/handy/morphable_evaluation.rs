@@ -5,9 +5,9 @@
 
 use meshgnn_losses::metrics::{ErrorSummary, generalisation, specificity};
 
-use crate::latent_gaussian::LatentGaussian;
-use crate::morphable_model::MorphableModel;
-use crate::shape_batches::{decode_latents, encode_shapes};
+use crate::handy::latent_gaussian::LatentGaussian;
+use crate::handy::morphable_model::MorphableModel;
+use crate::handy::shape_batches::{decode_latents, encode_shapes};
 use crate::tensor_file::flatten_points;
 use crate::{Error, Result};
 
@@ -129,7 +129,7 @@ pub(crate) fn rms_radius(shape: &[[f32; 3]]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pca::Pca;
+    use crate::handy::pca::Pca;
     use meshgnn_geometry::TriMesh;
 
     fn tri() -> TriMesh {

@@ -12,7 +12,6 @@
 //!   any thread count.
 //! - Eigenvalues are the sample variances (divided by `S − 1`), in squared input units.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use candle_core::{Device, Tensor};
@@ -21,15 +20,15 @@ use meshgnn_geometry::{TriMesh, atomic_write};
 use meshgnn_losses::metrics::{CentredShapes, centred_shapes};
 use rayon::prelude::*;
 
-use crate::morphable_model::MorphableModel;
+use crate::handy::morphable_model::MorphableModel;
 use crate::tensor_file::{
-    Array, check_shape, flatten_points, metadata_value, parse, read_f32, read_f64, read_u32,
-    serialize_arrays, unflatten_points,
+    Array, check_shape, flatten_points, parse, read_f32, read_f64, read_u32, serialize_arrays,
+    unflatten_points,
 };
-use crate::{Error, Result};
+use crate::{CheckpointHeader, Error, LoadCheckpoint, Result};
 
-/// `format` metadata value of a PCA checkpoint.
-pub const PCA_FORMAT: &str = "meshgnn-pca";
+/// The model's name in checkpoints.
+pub const PCA_MODEL_NAME: &str = "pca";
 
 /// A PCA shape model (eq. 3.2): `B(z) = T + Σ_k U_k σ_k z_k` with mean `T` (`3V`), orthonormal
 /// components `U_k` (`3V` each) and standard deviations `σ_k`.
@@ -241,7 +240,8 @@ impl Pca {
         Ok(self.encode(&x)?.flatten_all()?.to_vec1()?)
     }
 
-    /// The checkpoint as safetensors bytes: `pca.mean` (3V), `pca.components` (Z, 3V),
+    /// The checkpoint ([`crate::Checkpoint`] layout, model [`PCA_MODEL_NAME`], config
+    /// `{latent}`) as safetensors bytes: `pca.mean` (3V), `pca.components` (Z, 3V),
     /// `pca.variances` (S − 1, f64), `template.vertices` (V, 3), `template.triangles` (F, 3).
     pub fn to_bytes(&self) -> Result<Vec<u8>> {
         let dim = self.mean.len();
@@ -258,22 +258,15 @@ impl Pca {
                 &tf.iter().flatten().copied().collect::<Vec<_>>(),
             ),
         ];
-        let meta: HashMap<String, String> = [
-            ("format".to_string(), PCA_FORMAT.to_string()),
-            ("latent".to_string(), z.to_string()),
-        ]
-        .into();
+        let config = serde_json::Map::from_iter([("latent".to_string(), z.into())]);
+        let meta = CheckpointHeader::new(PCA_MODEL_NAME, config).to_metadata()?;
         serialize_arrays(&arrays, meta, Path::new("<pca>"))
     }
 
-    /// Reads a checkpoint written by [`Pca::to_bytes`]; `source` names it in errors.
+    /// Reads a checkpoint written by [`Pca::to_bytes`] (or by the earlier `meshgnn-pca`
+    /// layout); `source` names it in errors.
     pub fn from_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
-        if metadata_value(bytes, "format", source)?.as_deref() != Some(PCA_FORMAT) {
-            return Err(Error::Checkpoint {
-                path: source.to_path_buf(),
-                reason: format!("not a PCA model (metadata format ≠ {PCA_FORMAT})"),
-            });
-        }
+        CheckpointHeader::from_bytes(bytes, source)?.expect_model(PCA_MODEL_NAME, source)?;
         let st = parse(bytes, source)?;
         let (vs, verts) = read_f32(&st, "template.vertices", source)?;
         let (fs, tris) = read_u32(&st, "template.triangles", source)?;
@@ -318,6 +311,12 @@ impl Pca {
             reason: e.to_string(),
         })?;
         Self::from_bytes(&bytes, path)
+    }
+}
+
+impl LoadCheckpoint for Pca {
+    fn from_checkpoint_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
+        Self::from_bytes(bytes, source)
     }
 }
 

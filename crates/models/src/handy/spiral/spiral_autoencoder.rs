@@ -19,8 +19,10 @@ use candle_nn::{Linear, Module, VarBuilder};
 use meshgnn_graph::HierarchyOptions;
 use serde::{Deserialize, Serialize};
 
-use crate::spiral::pool::check_vertices;
-use crate::spiral::{Pool, SpiralConv, SpiralConvConfig, SpiralPadding, TemplateTensors, Unpool};
+use crate::handy::spiral::pool::check_vertices;
+use crate::handy::spiral::{
+    Pool, SpiralConv, SpiralConvConfig, SpiralPadding, TemplateTensors, Unpool,
+};
 use crate::{Error, Result};
 
 /// The non-linearity after every spiral convolution but the last.
@@ -303,7 +305,7 @@ impl SpiralAutoencoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spiral::test_fixtures::tiny_config;
+    use crate::handy::spiral::test_fixtures::tiny_config;
     use candle_core::{DType, Device};
     use candle_nn::VarMap;
 

@@ -2,13 +2,15 @@
 //! of thesis ch. 3.3.5, Figure 3.9, applied to shapes): encode two registered shapes, walk the
 //! straight line between their codes, decode.
 
-use crate::morphable_model::MorphableModel;
-use crate::shape_batches::{decode_latents, encode_shapes};
+use crate::count_bounds::MAX_DECODED_SHAPES;
+use crate::handy::morphable_model::MorphableModel;
+use crate::handy::shape_batches::{decode_latents, encode_shapes};
 use crate::{Error, Result};
 
-/// `steps ≥ 2` shapes (`#V×3` each) decoded from `(1 − t) z_a + t z_b`, `t = i / (steps − 1)`,
+/// `steps` shapes (`#V×3` each) decoded from `(1 − t) z_a + t z_b`, `t = i / (steps − 1)`,
 /// with `z_a, z_b` the codes of `a, b: #V×3` (registered to the model's template). The first
-/// and last are the model's reconstructions of `a` and `b`.
+/// and last are the model's reconstructions of `a` and `b`. `steps` must be in
+/// `2..=`[`MAX_DECODED_SHAPES`], checked before anything is decoded.
 ///
 /// ```
 /// use meshgnn_geometry::icosphere;
@@ -26,10 +28,12 @@ pub fn interpolate_shapes<M: MorphableModel + ?Sized>(
     b: &[[f32; 3]],
     steps: usize,
 ) -> Result<Vec<Vec<[f32; 3]>>> {
-    if steps < 2 {
+    if !(2..=MAX_DECODED_SHAPES).contains(&steps) {
         return Err(Error::Invalid {
             what: "interpolation steps".into(),
-            reason: format!("{steps}: need at least 2 (both ends)"),
+            reason: format!(
+                "{steps}: need 2 (both ends) to {MAX_DECODED_SHAPES} (every step is a decoded mesh)"
+            ),
         });
     }
     let codes = encode_shapes(model, &[a.to_vec(), b.to_vec()])?;

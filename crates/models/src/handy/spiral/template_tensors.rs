@@ -25,7 +25,7 @@ use meshgnn_graph::{
     build_hierarchy,
 };
 
-use crate::spiral::{Pool, SpiralPadding, Unpool};
+use crate::handy::spiral::{Pool, SpiralPadding, Unpool};
 use crate::{Error, Result};
 
 /// The per-level template data of a spiral autoencoder, on a device.
@@ -156,7 +156,7 @@ impl TemplateTensors {
         &self.device
     }
 
-    /// Spirals of `level` as the flat `(V·L)` `u32` tensor [`crate::spiral::SpiralConv`]
+    /// Spirals of `level` as the flat `(V·L)` `u32` tensor [`crate::handy::spiral::SpiralConv`]
     /// takes; with [`SpiralPadding::Zero`] the padded entries become the pad index `V`.
     pub fn spirals(&self, level: usize, padding: SpiralPadding) -> Result<Tensor> {
         let tensor = self

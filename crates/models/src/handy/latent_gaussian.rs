@@ -211,6 +211,40 @@ impl LatentGaussian {
             })
             .collect()
     }
+
+    /// The Gaussian as JSON `{"cholesky": [..], "mean": [..]}` (how a hand model file stores
+    /// it: the entry [`crate::LATENT_GAUSSIAN_KEY`]).
+    pub fn to_json(&self) -> String {
+        serde_json::json!({"mean": self.mean, "cholesky": self.cholesky}).to_string()
+    }
+
+    /// Reads [`LatentGaussian::to_json`]'s text; errors name the missing or malformed key.
+    ///
+    /// ```
+    /// use meshgnn_models::LatentGaussian;
+    /// let g = LatentGaussian::standard(2);
+    /// assert_eq!(LatentGaussian::from_json(&g.to_json())?, g);
+    /// assert!(LatentGaussian::from_json(r#"{"mean": [0.0]}"#).is_err());
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn from_json(text: &str) -> Result<Self> {
+        let value: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| invalid("latent Gaussian", format!("not JSON: {e}")))?;
+        let list = |key: &str| -> Result<Vec<f64>> {
+            value
+                .get(key)
+                .and_then(serde_json::Value::as_array)
+                .ok_or_else(|| invalid("latent Gaussian", format!("`{key}` missing")))?
+                .iter()
+                .map(|x| {
+                    x.as_f64().ok_or_else(|| {
+                        invalid("latent Gaussian", format!("`{key}` holds a non-number"))
+                    })
+                })
+                .collect()
+        };
+        Self::from_parts(list("mean")?, list("cholesky")?)
+    }
 }
 
 #[cfg(test)]

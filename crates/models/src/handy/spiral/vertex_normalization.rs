@@ -163,7 +163,7 @@ mod tests {
         assert_eq!(mean, vec![vec![1.0, 2.0, 1.0], vec![2.0, 5.0, 2.0]]);
         // Population std 1 and 2; constant coordinates get the floor 1e-6 · 2.
         assert_eq!(std, vec![vec![1.0, 2.0, 2e-6], vec![1.0, 2e-6, 2e-6]]);
-        let x = crate::spiral::mesh_batch(&meshes, &Device::Cpu).unwrap();
+        let x = crate::handy::spiral::mesh_batch(&meshes, &Device::Cpu).unwrap();
         let z = n.normalize(&x).unwrap();
         assert_eq!(z.to_vec3::<f32>().unwrap()[0][0], vec![-1.0, -1.0, 0.0]);
         let back = n.denormalize(&z).unwrap().to_vec3::<f32>().unwrap();

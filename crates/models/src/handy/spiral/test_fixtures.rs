@@ -1,8 +1,8 @@
-//! Tiny templates and shape sets shared by the tests of this module.
+//! Tiny templates and shape sets shared by the tests of the `handy` module.
 
 use meshgnn_geometry::TriMesh;
 
-use crate::spiral::SpiralAutoencoderConfig;
+use crate::handy::spiral::SpiralAutoencoderConfig;
 
 /// A 2-level network (162 → 42 → 12 vertices on `icosphere(2)`).
 pub(crate) fn tiny_config(latent_size: usize) -> SpiralAutoencoderConfig {

@@ -7,7 +7,7 @@
 //!
 //! # Conventions
 //! - Features are `(B, V, C)` (batch, vertex, channel); spirals are a flat `u32` index tensor
-//!   `(V·L)`, row `v` being the spiral of vertex `v` (see [`crate::spiral::TemplateTensors`]).
+//!   `(V·L)`, row `v` being the spiral of vertex `v` (see [`crate::handy::spiral::TemplateTensors`]).
 //! - The weight is `(C_out, L·C_in)` and multiplies the spiral entries in order, channels
 //!   fastest: column `l·C_in + c` is channel `c` of spiral entry `l`.
 //! - Padding ([`SpiralPadding`]): `meshgnn_graph::Spirals` pads a short spiral by repeating its

@@ -1,0 +1,144 @@
+//! The bundled models: every file of `crates/models/weights/`, embedded in the binary, loaded
+//! by name through one entry, [`load`]. Next to each file, `<name>.manifest.json` records how
+//! it was made (commands, seed, data, code version, wall time, figures) and its sha256 (a test
+//! checks it).
+//!
+//! | name | model | loads as |
+//! |---|---|---|
+//! | `hand_autoencoder` | Handy++, latent 8 (docs/handy.md) | [`crate::LoadedHandModel`], [`crate::handy::spiral::SpiralMorphableModel`] |
+//! | `point_simplifier` | the point simplifier of ch. 5.3 (docs/pcsimplify_model.md) | [`crate::point_simplifier::PointSimplifier`] |
+
+use std::path::Path;
+
+use crate::{Error, LoadCheckpoint, Result};
+
+/// One bundled model.
+struct Bundled {
+    name: &'static str,
+    bytes: &'static [u8],
+    manifest: &'static str,
+}
+
+/// Every bundled model, by name.
+const BUNDLED: [Bundled; 2] = [
+    Bundled {
+        name: "hand_autoencoder",
+        bytes: include_bytes!("../weights/hand_autoencoder.safetensors"),
+        manifest: include_str!("../weights/hand_autoencoder.manifest.json"),
+    },
+    Bundled {
+        name: "point_simplifier",
+        bytes: include_bytes!("../weights/point_simplifier.safetensors"),
+        manifest: include_str!("../weights/point_simplifier.manifest.json"),
+    },
+];
+
+/// The names of the bundled models.
+pub fn names() -> impl Iterator<Item = &'static str> {
+    BUNDLED.iter().map(|b| b.name)
+}
+
+fn find(name: &str) -> Result<&'static Bundled> {
+    BUNDLED
+        .iter()
+        .find(|b| b.name == name)
+        .ok_or_else(|| Error::Invalid {
+            what: format!("bundled model {name:?}"),
+            reason: format!(
+                "does not exist; the bundled models are {}",
+                names().collect::<Vec<_>>().join(", ")
+            ),
+        })
+}
+
+/// The file bytes of the bundled model `name`.
+pub fn bytes(name: &str) -> Result<&'static [u8]> {
+    Ok(find(name)?.bytes)
+}
+
+/// The manifest (JSON) of the bundled model `name`.
+pub fn manifest(name: &str) -> Result<&'static str> {
+    Ok(find(name)?.manifest)
+}
+
+/// The bundled model `name` as `M` (any model type that loads from a checkpoint); errors when
+/// there is no such model or it is not an `M`.
+///
+/// ```
+/// use meshgnn_models::pretrained;
+/// use meshgnn_models::point_simplifier::PointSimplifier;
+/// let model: PointSimplifier = pretrained::load("point_simplifier")?;
+/// assert_eq!(model.config().hidden, 64);
+/// assert!(pretrained::load::<PointSimplifier>("hand_autoencoder").is_err());
+/// # Ok::<(), meshgnn_models::Error>(())
+/// ```
+pub fn load<M: LoadCheckpoint>(name: &str) -> Result<M> {
+    let bundled = find(name)?;
+    M::from_checkpoint_bytes(
+        bundled.bytes,
+        Path::new(&format!("<bundled>/{}.safetensors", bundled.name)),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sha2::{Digest, Sha256};
+
+    use crate::{CheckpointHeader, LoadedHandModel, MorphableModel};
+
+    #[test]
+    fn every_manifest_names_its_file_and_matches_its_sha256() {
+        let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("weights");
+        let mut files: Vec<String> = std::fs::read_dir(&folder)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".safetensors"))
+            .collect();
+        files.sort();
+        // every file of the folder is bundled, and every bundled model has a file
+        let mut bundled: Vec<String> = names().map(|n| format!("{n}.safetensors")).collect();
+        bundled.sort();
+        assert_eq!(files, bundled);
+        for b in &BUNDLED {
+            let manifest: serde_json::Value = serde_json::from_str(b.manifest).unwrap();
+            assert_eq!(manifest["name"], b.name);
+            assert_eq!(manifest["file"], format!("{}.safetensors", b.name));
+            let on_disk = std::fs::read(folder.join(format!("{}.safetensors", b.name))).unwrap();
+            assert_eq!(
+                on_disk, b.bytes,
+                "{}: the embedded bytes are the file",
+                b.name
+            );
+            let digest: String = Sha256::digest(&on_disk)
+                .iter()
+                .map(|x| format!("{x:02x}"))
+                .collect();
+            assert_eq!(manifest["sha256"], digest, "{}", b.name);
+            for key in [
+                "commands",
+                "seed",
+                "data",
+                "wall_time_s",
+                "figures",
+                "code_version",
+            ] {
+                assert!(!manifest[key].is_null(), "{}: no {key:?}", b.name);
+            }
+            let header = CheckpointHeader::from_bytes(b.bytes, Path::new(b.name)).unwrap();
+            assert_eq!(manifest["model"], header.model.as_str(), "{}", b.name);
+        }
+    }
+
+    #[test]
+    fn the_committed_files_of_the_earlier_layouts_still_load() {
+        let hand: LoadedHandModel = load("hand_autoencoder").unwrap();
+        assert_eq!(hand.model.latent_size(), 8);
+        assert_eq!(hand.model.template().vertex_count(), 2833);
+        let simplifier: crate::point_simplifier::PointSimplifier =
+            load("point_simplifier").unwrap();
+        assert_eq!(simplifier.config(), &Default::default());
+        let err = load::<LoadedHandModel>("nothing").unwrap_err().to_string();
+        assert!(err.contains("hand_autoencoder, point_simplifier"), "{err}");
+    }
+}
