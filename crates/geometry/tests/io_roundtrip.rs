@@ -7,6 +7,7 @@ use meshgnn_geometry::{
     MeshFormat, PlyEncoding, PointCloud, TriMesh, icosphere, read_mesh, read_mesh_bytes,
     read_point_cloud, subdivided_cube, write_mesh, write_ply, write_point_cloud,
 };
+use proptest::prelude::*;
 
 /// An icosphere with per-vertex normals, uvs and colours (colours on the 1/255 grid so
 /// 8-bit formats keep them exactly).
@@ -143,4 +144,66 @@ fn gltf_json_cannot_be_written_and_unknown_extensions_fail() {
         read_mesh(dir.path().join("missing.ply")),
         Err(meshgnn_geometry::Error::Io { .. })
     ));
+}
+
+/// Any finite f32: normal numbers of every exponent, subnormals and both zeros.
+fn coordinate() -> impl Strategy<Value = f32> {
+    prop::num::f32::NORMAL | prop::num::f32::SUBNORMAL | prop::num::f32::ZERO
+}
+
+/// A mesh of 1–24 vertices and 0–24 triangles over them (degenerate and repeated faces
+/// included), with unit-free normals.
+fn arbitrary_mesh() -> impl Strategy<Value = TriMesh> {
+    (1usize..24).prop_flat_map(|count| {
+        let point = || [coordinate(), coordinate(), coordinate()];
+        let index = 0..count as u32;
+        (
+            prop::collection::vec(point(), count),
+            prop::collection::vec([index.clone(), index.clone(), index], 0..24),
+            prop::collection::vec(point(), count),
+        )
+            .prop_map(|(vertices, triangles, normals)| {
+                TriMesh::new(vertices, triangles)
+                    .unwrap()
+                    .with_normals(normals)
+                    .unwrap()
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Valid files of every writable format, made from arbitrary meshes, read back bit for
+    /// bit (PLY in all three encodings).
+    #[test]
+    fn arbitrary_meshes_round_trip_exactly(mesh in arbitrary_mesh()) {
+        let dir = tempfile::tempdir().unwrap();
+        let mut paths = Vec::new();
+        for encoding in [
+            PlyEncoding::Ascii,
+            PlyEncoding::BinaryLittleEndian,
+            PlyEncoding::BinaryBigEndian,
+        ] {
+            let path = dir.path().join(format!("{encoding:?}.ply"));
+            write_ply(&path, &mesh, encoding).unwrap();
+            paths.push(path);
+        }
+        for ext in ["obj", "off", "glb"] {
+            let path = dir.path().join(format!("m.{ext}"));
+            write_mesh(&path, &mesh).unwrap();
+            paths.push(path);
+        }
+        for path in &paths {
+            let back = read_mesh(path).unwrap();
+            prop_assert_eq!(back.vertices(), mesh.vertices(), "{:?}", path);
+            prop_assert_eq!(back.triangles(), mesh.triangles(), "{:?}", path);
+            prop_assert_eq!(back.normals(), mesh.normals(), "{:?}", path);
+        }
+        let path = dir.path().join("m.xyz");
+        write_mesh(&path, &mesh).unwrap();
+        let cloud = read_point_cloud(&path).unwrap();
+        prop_assert_eq!(cloud.points(), mesh.vertices());
+        prop_assert_eq!(cloud.normals(), mesh.normals());
+    }
 }

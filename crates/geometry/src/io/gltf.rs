@@ -8,9 +8,11 @@
 //! the inverse-transpose, winding flipped under a mirroring transform. `TriangleStrip` and
 //! `TriangleFan` are converted to triangles; points and lines are an error for a mesh.
 //! Buffers: the GLB binary chunk, base64 `data:` URIs, and (from a file only) external
-//! `.bin` files next to the `.gltf`.
+//! files inside the `.gltf`'s own folder, resolved by [`GltfBuffers`] (never the crate's
+//! `import`, which follows any path).
 
 use super::format_error::format_error;
+use super::gltf_buffers::GltfBuffers;
 use super::mesh_data::MeshData;
 use crate::error::Result;
 use gltf::Semantic;
@@ -22,6 +24,12 @@ use std::path::Path;
 const MAX_NODE_VISITS: usize = 1 << 20;
 /// Deepest node hierarchy followed.
 const MAX_DEPTH: usize = 256;
+/// Most accessor elements (vertices, attributes and indices, over all instances) read per
+/// byte of buffer data. A file without reuse reads at most one element per byte (u8 indices;
+/// a float position takes 12); instancing and accessors sharing bytes repeat data, which
+/// this caps at 16 times so that a kilobyte of nodes cannot expand one mesh into terabytes:
+/// memory stays proportional to the input.
+const MAX_ELEMENTS_PER_BUFFER_BYTE: usize = 16;
 
 /// Splits a GLB container into its JSON chunk and optional binary chunk.
 fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [u8]>)> {
@@ -82,8 +90,8 @@ fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [
     }
 }
 
-/// Reads glTF or GLB bytes. `base` is the directory for external buffers (`None`: bytes
-/// from memory, external buffers are an error). With `points_ok`, non-triangle primitives
+/// Reads glTF or GLB bytes. `base` is the glTF file's folder, the only place external
+/// buffers may come from (`None`: bytes from memory, external buffers are an error). With `points_ok`, non-triangle primitives
 /// contribute their vertices instead of failing (for point clouds).
 pub(crate) fn read_gltf(
     bytes: &[u8],
@@ -116,9 +124,11 @@ pub(crate) fn read_gltf(
     }
     let document = gltf::Document::from_json(root)
         .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
-    let buffers = gltf::import_buffers(&document, base, blob.map(<[u8]>::to_vec))
-        .map_err(|e| format_error(path, "glTF buffers", e.to_string()))?;
-    let buffers: Vec<Vec<u8>> = buffers.into_iter().map(|b| b.0).collect();
+    let buffers = GltfBuffers::load(&document, blob, path, base)?;
+    let budget = buffers
+        .total_len()
+        .saturating_mul(MAX_ELEMENTS_PER_BUFFER_BYTE);
+    let mut spent = 0usize;
     let mut instances: Vec<(gltf::Mesh, [[f64; 4]; 4])> = Vec::new();
     let identity = [
         [1.0, 0.0, 0.0, 0.0],
@@ -163,6 +173,24 @@ pub(crate) fn read_gltf(
         for primitive in mesh.primitives() {
             let element = format!("primitive {} of mesh {}", primitive.index(), mesh.index());
             let fail = |message: String| format_error(path, element.clone(), message);
+            // Charges every accessor this primitive reads against the budget, before reading.
+            let accessors = [
+                primitive.get(&Semantic::Positions),
+                primitive.get(&Semantic::Normals),
+                primitive.get(&Semantic::TexCoords(0)),
+                primitive.get(&Semantic::Colors(0)),
+                primitive.indices(),
+            ];
+            spent = accessors
+                .iter()
+                .flatten()
+                .fold(spent, |sum, a| sum.saturating_add(a.count()));
+            if spent > budget {
+                return Err(fail(format!(
+                    "instancing and shared accessors read over {budget} elements, \
+                     {MAX_ELEMENTS_PER_BUFFER_BYTE} per byte of buffer data"
+                )));
+            }
             let mode = primitive.mode();
             let triangles_mode = matches!(
                 mode,
@@ -286,7 +314,7 @@ fn check_count(got: usize, expected: usize) -> std::result::Result<(), String> {
 /// The bytes of an accessor's elements: `(data, stride, element size)`, bounds checked.
 fn accessor_bytes<'b>(
     accessor: &gltf::Accessor,
-    buffers: &'b [Vec<u8>],
+    buffers: &'b GltfBuffers<'_>,
 ) -> std::result::Result<(&'b [u8], usize, usize), String> {
     if accessor.sparse().is_some() {
         return Err(format!(
@@ -343,7 +371,7 @@ fn accessor_bytes<'b>(
 /// Reads an accessor of `N`-vectors of floats (or normalised unsigned integers).
 fn read_floats<const N: usize>(
     accessor: &gltf::Accessor,
-    buffers: &[Vec<u8>],
+    buffers: &GltfBuffers<'_>,
 ) -> std::result::Result<Vec<[f32; N]>, String> {
     if accessor.dimensions().multiplicity() != N {
         return Err(format!(
@@ -392,7 +420,7 @@ fn read_floats<const N: usize>(
 /// Reads an index accessor (scalar u8, u16 or u32).
 fn read_indices(
     accessor: &gltf::Accessor,
-    buffers: &[Vec<u8>],
+    buffers: &GltfBuffers<'_>,
 ) -> std::result::Result<Vec<u32>, String> {
     if accessor.dimensions() != Dimensions::Scalar {
         return Err(format!("accessor {} must be SCALAR", accessor.index()));
@@ -716,7 +744,12 @@ mod tests {
             other => panic!("expected an error, got {other:?}"),
         }
         match read(&document(4, 4, Some("missing.bin")), false) {
-            Err(Error::Format { element, .. }) => assert_eq!(element, "glTF buffers"),
+            Err(Error::Format {
+                element, message, ..
+            }) => {
+                assert_eq!(element, r#"buffer 0 (uri "missing.bin")"#);
+                assert!(message.contains("from memory have no folder"), "{message}");
+            }
             other => panic!("expected an error, got {other:?}"),
         }
         let dir = tempfile::tempdir().unwrap();
@@ -726,7 +759,15 @@ mod tests {
             Some(dir.path()),
             false,
         );
-        assert!(matches!(from_file, Err(Error::Format { .. })));
+        match from_file {
+            Err(Error::Format {
+                element, message, ..
+            }) => {
+                assert_eq!(element, r#"buffer 0 (uri "missing.bin")"#);
+                assert!(message.contains("cannot resolve missing.bin"), "{message}");
+            }
+            other => panic!("expected an error, got {other:?}"),
+        }
     }
 
     #[test]
