@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use meshgnn_geometry::{TriMesh, read_point_cloud, write_mesh};
+use meshgnn_geometry::{OutputGuard, TriMesh, read_point_cloud, write_mesh};
 use meshgnn_models::{ChamferDirection, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;
 
@@ -45,6 +45,7 @@ pub struct FitArgs {
 }
 
 pub fn run(args: &FitArgs) -> Result<()> {
+    OutputGuard::new(std::iter::once(&args.scan).chain(&args.model)).check(&args.output)?;
     let loaded = load_model(args.model.as_deref())?;
     let scan =
         read_point_cloud(&args.scan).with_context(|| format!("reading {}", args.scan.display()))?;

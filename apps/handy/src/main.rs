@@ -42,6 +42,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
+        eprintln!("handy: installing the interrupt handler: {error}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Train(args) => train::run(args),
         Command::Eval(args) => eval::run(args),

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
+use meshgnn_geometry::OutputGuard;
 use meshgnn_models::{MorphableModel, decode_latents};
 use serde_json::json;
 
@@ -40,6 +41,7 @@ pub fn run(args: &SampleArgs) -> Result<()> {
     let latents = loaded.gaussian.sample(args.count, args.seed);
     let shapes = decode_latents(&loaded.model, &latents)?;
     let ShapeFolder { files, sheet, .. } = write_shape_folder(
+        &OutputGuard::new(&args.model),
         &args.output,
         "sample",
         "samples.png",

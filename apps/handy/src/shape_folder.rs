@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use meshgnn_data::{View, contact_sheet, write_png};
-use meshgnn_geometry::{TriMesh, write_mesh};
+use meshgnn_geometry::{OutputGuard, TriMesh, write_mesh};
 
 /// What [`write_shape_folder`] wrote.
 pub struct ShapeFolder {
@@ -18,8 +18,10 @@ pub struct ShapeFolder {
 }
 
 /// Writes each shape (vertices on the template's faces) as `{prefix}_{i:03}.obj` in `output`
-/// (created) and all of them as a contact sheet `sheet_name` with `columns` columns.
+/// (created) and all of them as a contact sheet `sheet_name` with `columns` columns. The
+/// folder and every file are checked against `guard` before anything is created.
 pub fn write_shape_folder(
+    guard: &OutputGuard,
     output: &Path,
     prefix: &str,
     sheet_name: &str,
@@ -27,6 +29,14 @@ pub fn write_shape_folder(
     template: &TriMesh,
     shapes: Vec<Vec<[f32; 3]>>,
 ) -> Result<ShapeFolder> {
+    let paths: Vec<PathBuf> = (0..shapes.len())
+        .map(|i| output.join(format!("{prefix}_{i:03}.obj")))
+        .collect();
+    let sheet = output.join(sheet_name);
+    for path in std::iter::once(output).chain(paths.iter().map(PathBuf::as_path)) {
+        guard.check(path)?;
+    }
+    guard.check(&sheet)?;
     std::fs::create_dir_all(output).with_context(|| format!("creating {}", output.display()))?;
     let triangles = template.triangles().to_vec();
     let meshes = shapes
@@ -34,12 +44,10 @@ pub fn write_shape_folder(
         .map(|v| TriMesh::new(v, triangles.clone()))
         .collect::<meshgnn_geometry::Result<Vec<_>>>()?;
     let mut files = Vec::with_capacity(meshes.len());
-    for (i, mesh) in meshes.iter().enumerate() {
-        let path = output.join(format!("{prefix}_{i:03}.obj"));
-        write_mesh(&path, mesh).with_context(|| format!("writing {}", path.display()))?;
+    for (path, mesh) in paths.iter().zip(&meshes) {
+        write_mesh(path, mesh).with_context(|| format!("writing {}", path.display()))?;
         files.push(path.display().to_string());
     }
-    let sheet = output.join(sheet_name);
     let view = View {
         yaw: 0.0,
         pitch: -35.0,

@@ -31,6 +31,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
+        eprintln!("meshsimplify: installing the interrupt handler: {error}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Info(args) => info::run(args),
         Command::Simplify(args) => simplify::run(args),

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use meshgnn_geometry::{MeshFormat, read_mesh, write_mesh};
+use meshgnn_geometry::{MeshFormat, OutputGuard, read_mesh, write_mesh};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
 use serde_json::json;
 
@@ -73,16 +73,10 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     }
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
-    let same_file = match (args.input.canonicalize(), args.output.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => args.input == args.output,
-    };
-    if same_file && !args.force {
-        bail!(
-            "output {} is the input; pass --force to overwrite it",
-            args.output.display()
-        );
-    }
+    let guarded = if args.force { None } else { Some(&args.input) };
+    OutputGuard::new(guarded)
+        .overridable_by("--force")
+        .check(&args.output)?;
     let mesh = read_mesh(&args.input)?;
 
     let options = DecimationOptions {

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use meshgnn_geometry::{MeshFormat, atomic_write, unit_sphere_normalization};
+use meshgnn_geometry::{MeshFormat, OutputGuard, atomic_write, unit_sphere_normalization};
 use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
@@ -87,6 +87,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.methods.is_empty() {
         bail!("--methods: give at least one method");
+    }
+    if let Some(path) = &args.json_out {
+        OutputGuard::new(std::iter::once(&args.dir).chain(&args.weights)).check(path)?;
     }
     let files = list_inputs(&args.dir)?;
     if files.is_empty() {

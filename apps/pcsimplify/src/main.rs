@@ -37,6 +37,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
+        eprintln!("pcsimplify: installing the interrupt handler: {error}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Simplify(args) => simplify::run(args),
         Command::Bench(args) => bench::run(args),

@@ -3,13 +3,13 @@
 //! cloud or mesh (thesis ch. 5.3 and its ch. 5.5 baselines) and write them, or with
 //! `--triangulate` a mesh re-built over them (ch. 5.5.3 mesh route).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use meshgnn_geometry::{
-    MeshFormat, PointCloud, TangentChartOptions, TriMesh, mesh_report, tangent_chart_triangulation,
-    write_mesh, write_point_cloud,
+    MeshFormat, OutputGuard, PointCloud, TangentChartOptions, TriMesh, mesh_report,
+    tangent_chart_triangulation, write_mesh, write_point_cloud,
 };
 use serde_json::{Value, json};
 
@@ -59,7 +59,8 @@ pub struct SimplifyArgs {
 
 /// Reads, selects, writes, reports.
 pub fn run(args: &SimplifyArgs) -> Result<()> {
-    refuse_overwriting_input(&args.input, &args.output)?;
+    let inputs = std::iter::once(&args.input).chain(&args.weights);
+    OutputGuard::new(inputs).check(&args.output)?;
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
     let start = Instant::now();
@@ -109,21 +110,6 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         println!("{report}");
     } else {
         print_text(&report, &selection, args.verbose);
-    }
-    Ok(())
-}
-
-/// Stops before any work when `output` names the input file (possibly through another path).
-fn refuse_overwriting_input(input: &Path, output: &Path) -> Result<()> {
-    let same = match (input.canonicalize(), output.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => input == output,
-    };
-    if same {
-        bail!(
-            "the output {} is the input: choose another file (inputs are never overwritten)",
-            output.display()
-        );
     }
     Ok(())
 }
