@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use meshgnn_geometry::{OutputGuard, TriMesh, read_mesh};
-use meshgnn_models::{MorphableModel, interpolate_shapes};
+use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_mesh};
+use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, check_registered, interpolate_shapes};
 use serde_json::json;
 
-use crate::model::{check_topology, load_model};
+use crate::model::load_model;
 use crate::shape_folder::{ShapeFolder, write_shape_folder};
 
 /// Arguments of `handy interpolate`.
@@ -19,7 +19,7 @@ pub struct InterpolateArgs {
     pub a: PathBuf,
     /// Second hand.
     pub b: PathBuf,
-    /// Number of meshes, both ends included (≥ 2).
+    /// Number of meshes, both ends included (2 to 1000).
     #[arg(long, default_value_t = 8)]
     pub steps: usize,
     /// Output folder (created): `interp_000.obj`, …, `interpolation.png`.
@@ -34,10 +34,16 @@ pub struct InterpolateArgs {
 }
 
 pub fn run(args: &InterpolateArgs) -> Result<()> {
+    check_count(
+        "--steps",
+        args.steps,
+        2..=MAX_DECODED_SHAPES,
+        "every step is a decoded mesh and a contact-sheet tile",
+    )?;
     let loaded = load_model(args.model.as_deref())?;
     let read = |p: &PathBuf| -> Result<TriMesh> {
         let mesh = read_mesh(p).with_context(|| format!("reading {}", p.display()))?;
-        check_topology(&loaded.model, &mesh, p)?;
+        check_registered(&loaded.model, &mesh, p)?;
         Ok(mesh)
     };
     let (a, b) = (read(&args.a)?, read(&args.b)?);

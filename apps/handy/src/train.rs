@@ -8,15 +8,16 @@ use anyhow::{Context, Result};
 use candle_core::Device;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::OutputGuard;
-use meshgnn_models::spiral::{
-    SpiralAutoencoderConfig, SpiralMorphableModel, TrainConfig, train_spiral_model,
+use meshgnn_geometry::{OutputGuard, check_count};
+use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralTraining};
+use meshgnn_models::training::{TrainingConfig, train};
+use meshgnn_models::{
+    LATENT_GAUSSIAN_KEY, MAX_BATCH_SIZE, MAX_EPOCHS, MAX_LATENT_SIZE, generalisation_error,
+    latent_gaussian,
 };
-use meshgnn_models::{generalisation_error, latent_gaussian};
 use serde_json::json;
 
 use crate::dataset;
-use crate::model::{LATENT_GAUSSIAN_KEY, gaussian_json};
 
 /// Arguments of `handy train`.
 #[derive(Args, Debug)]
@@ -58,6 +59,36 @@ pub struct TrainArgs {
 
 pub fn run(args: &TrainArgs) -> Result<()> {
     OutputGuard::new([&args.data]).check(&args.output)?;
+    check_count(
+        "--latent",
+        args.latent,
+        1..=MAX_LATENT_SIZE,
+        "latent code size",
+    )?;
+    check_count(
+        "--epochs",
+        args.epochs,
+        1..=MAX_EPOCHS,
+        "passes over the data",
+    )?;
+    check_count(
+        "--batch-size",
+        args.batch_size,
+        1..=MAX_BATCH_SIZE,
+        "meshes per step",
+    )?;
+    check_count(
+        "--levels",
+        args.levels,
+        1..=4,
+        "pooling levels of Table 3.1",
+    )?;
+    if !(args.lr > 0.0 && args.lr.is_finite()) {
+        anyhow::bail!("--lr {}: must be a finite learning rate > 0", args.lr);
+    }
+    if !(args.lr_decay > 0.0 && args.lr_decay <= 1.0) {
+        anyhow::bail!("--lr-decay {}: must be in (0, 1]", args.lr_decay);
+    }
     let data = dataset::open(&args.data)?;
     let train = data.load("train", None)?;
     let validation = if data.has_split("test") {
@@ -65,9 +96,6 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     } else {
         Vec::new()
     };
-    if !(1..=4).contains(&args.levels) {
-        anyhow::bail!("--levels {}: must be 1 to 4", args.levels);
-    }
     let defaults = SpiralAutoencoderConfig::default();
     let model_config = SpiralAutoencoderConfig {
         latent_size: args.latent,
@@ -92,14 +120,16 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             .collect(),
         ..defaults
     };
-    let config = TrainConfig {
+    let config = TrainingConfig {
         epochs: args.epochs,
         batch_size: args.batch_size,
         learning_rate: args.lr,
         lr_decay: args.lr_decay,
         seed: args.seed,
         checkpoint: Some(args.output.clone()),
-        resume: args.resume,
+        // `--resume` without a checkpoint yet starts afresh
+        resume: args.resume && args.output.exists(),
+        best_weights: None,
     };
     eprintln!(
         "training Handy++ (latent {}) on {} meshes of {} vertices, validating on {}",
@@ -114,45 +144,44 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     {
         bar.set_style(style);
     }
-    let mut last_val = None;
-    let trained = train_spiral_model(
+    let mut task = SpiralTraining::new(
         &data.template,
         &model_config,
         &train,
         &validation,
-        &config,
+        args.seed,
         &Device::Cpu,
-        &mut |p| {
-            bar.set_position(p.step as u64);
-            if let Some(v) = p.val_mm {
-                last_val = Some(v);
-            }
-            let val = last_val.map_or(String::from("-"), |v| format!("{v:.3}"));
-            bar.set_message(format!(
-                "{}/{}  train {:.3} mm  val {val} mm",
+    )?;
+    let mut last_val = None;
+    let trained = train(&mut task, &config, &mut |p| {
+        bar.set_position(p.step);
+        if let Some(v) = p.validation {
+            last_val = Some(v);
+        }
+        let val = last_val.map_or(String::from("-"), |v| format!("{v:.3}"));
+        let train_mm = p.figure.unwrap_or(f64::NAN);
+        bar.set_message(format!(
+            "{}/{}  train {train_mm:.3} mm  val {val} mm",
+            p.epoch + 1,
+            p.epochs,
+        ));
+        if p.epoch_end {
+            let line = format!(
+                "epoch {:>3}/{}  lr {:.2e}  train {train_mm:.3} mm  val {val} mm",
                 p.epoch + 1,
                 p.epochs,
-                p.train_mm
-            ));
-            if p.epoch_end {
-                let line = format!(
-                    "epoch {:>3}/{}  lr {:.2e}  train {:.3} mm  val {val} mm",
-                    p.epoch + 1,
-                    p.epochs,
-                    p.learning_rate,
-                    p.train_mm
-                );
-                // a hidden bar (no terminal, e.g. a log file) drops `println`
-                if bar.is_hidden() {
-                    eprintln!("{line}");
-                } else {
-                    bar.println(line);
-                }
+                p.learning_rate,
+            );
+            // a hidden bar (no terminal, e.g. a log file) drops `println`
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
             }
-        },
-    )?;
+        }
+    })?;
     bar.finish_and_clear();
-    let model = trained.model;
+    let model = task.into_model();
     let gaussian = latent_gaussian(&model, &train)?;
     let train_mm = generalisation_error(&model, &train)?.mean;
     let val_mm = if validation.is_empty() {
@@ -160,25 +189,21 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     } else {
         Some(generalisation_error(&model, &validation)?.mean)
     };
-    // keep the checkpoint's training state so `--resume` can continue with more epochs
-    let (_, meta) = SpiralMorphableModel::load_with_metadata(&args.output, &Device::Cpu)
-        .with_context(|| format!("re-reading {}", args.output.display()))?;
-    let mut extra = vec![
-        (LATENT_GAUSSIAN_KEY, gaussian_json(&gaussian)),
-        (
-            "trained_on",
-            format!("{} ({} training meshes)", args.data.display(), train.len()),
-        ),
-        ("train_mm", format!("{train_mm:.4}")),
-    ];
+    // the model file: the weights, the latent Gaussian `handy` samples from, and the training
+    // state, so `--resume` can continue with more epochs
+    let mut file = model.to_checkpoint()?;
+    file.header.training = Some(trained.state);
+    let entries = &mut file.header.entries;
+    entries.insert(LATENT_GAUSSIAN_KEY.into(), gaussian.to_json());
+    entries.insert(
+        "trained_on".into(),
+        format!("{} ({} training meshes)", args.data.display(), train.len()),
+    );
+    entries.insert("train_mm".into(), format!("{train_mm:.4}"));
     if let Some(v) = val_mm {
-        extra.push(("val_mm", format!("{v:.4}")));
+        entries.insert("val_mm".into(), format!("{v:.4}"));
     }
-    if let Some(t) = meta.get("training") {
-        extra.push(("training", t.clone()));
-    }
-    model
-        .save_with_metadata(&args.output, &extra)
+    file.save(&args.output)
         .with_context(|| format!("writing {}", args.output.display()))?;
     let summary = json!({
         "latent": args.latent,

@@ -17,10 +17,13 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_data::FolderDataset;
-use meshgnn_geometry::{OutputGuard, sample_surface};
+use meshgnn_geometry::{OutputGuard, check_count, sample_surface};
 use meshgnn_models::point_simplifier::{
-    PointSimplifierConfig, Trainer, TrainingConfig, TrainingSample, prepare_training_sample,
+    PointSimplifierConfig, SimplifierObjective, SimplifierTraining, TrainingSample,
+    prepare_training_sample,
 };
+use meshgnn_models::training::{Trainable, TrainingConfig, train};
+use meshgnn_models::{MAX_CLOUDS_PER_SHAPE, MAX_EPOCHS, MAX_TRAINING_CLOUD_POINTS};
 use rayon::prelude::*;
 
 /// Arguments of `pcsimplify train`.
@@ -70,10 +73,39 @@ fn checkpoint_path(output: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Loads the clouds, trains, writes the weights.
+/// Loads the clouds, trains (`meshgnn_models::training::train`), writes the weights.
 pub fn run(args: &TrainArgs) -> Result<()> {
-    if args.points < 16 || args.clouds_per_shape == 0 {
-        bail!("--points must be at least 16 and --clouds-per-shape at least 1");
+    check_count(
+        "--points",
+        args.points,
+        16..=MAX_TRAINING_CLOUD_POINTS,
+        "surface samples per training cloud",
+    )?;
+    check_count(
+        "--clouds-per-shape",
+        args.clouds_per_shape,
+        1..=MAX_CLOUDS_PER_SHAPE,
+        "training clouds sampled from each mesh",
+    )?;
+    check_count(
+        "--epochs",
+        args.epochs,
+        1..=MAX_EPOCHS,
+        "passes over the data",
+    )?;
+    for (name, value) in [
+        ("--learning-rate", args.learning_rate),
+        ("--tau", f64::from(args.tau)),
+    ] {
+        if !(value > 0.0 && value.is_finite()) {
+            bail!("{name} {value}: must be finite and > 0");
+        }
+    }
+    if !(args.curvature_weight >= 0.0 && args.curvature_weight.is_finite()) {
+        bail!(
+            "--curvature-weight {}: must be finite and >= 0",
+            args.curvature_weight
+        );
     }
     let guard = OutputGuard::new([&args.data]);
     guard.check(&args.output)?;
@@ -89,10 +121,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         bail!("the splits {:?} list no shapes", args.splits);
     }
     let model_config = PointSimplifierConfig::default();
-    let config = TrainingConfig {
-        epochs: args.epochs,
-        seed: args.seed,
-        learning_rate: args.learning_rate,
+    let objective = SimplifierObjective {
         curvature_weight: args.curvature_weight,
         tau: args.tau,
         ..Default::default()
@@ -112,7 +141,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 let seed = first_seed.wrapping_add(k as u64);
                 let cloud = sample_surface(&mesh, args.points, seed)
                     .with_context(|| format!("sampling {name}"))?;
-                prepare_training_sample(&cloud.points, &model_config, &config)
+                prepare_training_sample(&cloud.points, &model_config, &objective)
                     .with_context(|| format!("preparing {name}"))
             })
             .collect()
@@ -120,34 +149,46 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     let samples = load(&train_names, args.seed)?;
     let validation = load(&validation_names, args.seed.wrapping_add(1 << 32))?;
     let checkpoint = checkpoint_path(&args.output);
-    let mut trainer = if args.resume {
-        Trainer::resume(&checkpoint, &config)
-            .with_context(|| format!("resuming from {}", checkpoint.display()))?
-    } else {
-        Trainer::new(&model_config, &config)?
+    let (clouds, held_out) = (samples.len(), !validation.is_empty());
+    let mut task =
+        SimplifierTraining::new(&model_config, &objective, samples, validation, args.seed)?;
+    let config = TrainingConfig {
+        epochs: args.epochs,
+        // one cloud per step (ch. 5.6)
+        batch_size: 1,
+        learning_rate: args.learning_rate,
+        lr_decay: 0.99,
+        seed: args.seed,
+        checkpoint: Some(checkpoint.clone()),
+        resume: args.resume,
+        best_weights: held_out.then(|| args.output.clone()),
     };
-    let remaining = args.epochs.saturating_sub(trainer.epoch());
-    let bar = ProgressBar::new((remaining * samples.len()) as u64);
+    let bar = ProgressBar::new((args.epochs * clouds) as u64);
     if let Ok(style) = ProgressStyle::with_template(
         "train [{elapsed_precise}] {wide_bar} {pos}/{len} ({eta} left) {msg}",
     ) {
         bar.set_style(style);
     }
     eprintln!(
-        "training on {} clouds of {} points from {} shapes ({:?}; {} held out: {:?}), {} epochs from epoch {}",
-        samples.len(),
+        "training on {clouds} clouds of {} points from {} shapes ({:?}; {} held out: {:?}), {} epochs{}",
         args.points,
         train_names.len(),
         args.splits,
         validation_names.len(),
         validation_names,
         args.epochs,
-        trainer.epoch()
+        if args.resume {
+            format!(" from {}", checkpoint.display())
+        } else {
+            String::new()
+        },
     );
-    let mut last = f64::NAN;
-    while trainer.epoch() < args.epochs {
-        let mut running = 0.0;
-        let epoch_loss = trainer.train_epoch(&samples, &mut |p| {
+    let mut running = 0.0;
+    let run = train(&mut task, &config, &mut |p| {
+        if !p.epoch_end {
+            if p.step_in_epoch == 1 {
+                running = 0.0;
+            }
             running += p.loss;
             bar.set_message(format!(
                 "epoch {} loss {:.5} (mean {:.5}) lr {:.2e}",
@@ -157,24 +198,20 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 p.learning_rate
             ));
             bar.inc(1);
-        })?;
-        // the weights first, then the checkpoint that records them as the best
-        let mut kept = "";
-        let mut validation_text = String::new();
-        if !validation.is_empty() {
-            let v = trainer.validation_loss(&validation)?;
-            validation_text = format!("  validation {v:.6}");
-            if trainer.record_validation(v) {
-                write_weights(&trainer, &args.output)?;
-                kept = "  (best so far: kept)";
-            }
+            return;
         }
-        trainer
-            .save(&checkpoint)
-            .with_context(|| format!("writing {}", checkpoint.display()))?;
+        let validation_text = p
+            .validation
+            .map_or(String::new(), |v| format!("  validation {v:.6}"));
+        let kept = if p.improved {
+            "  (best so far: kept)"
+        } else {
+            ""
+        };
         let line = format!(
-            "epoch {:>3}: mean loss {epoch_loss:.6}{validation_text}{kept}  ({:.0} s)",
-            trainer.epoch(),
+            "epoch {:>3}: mean loss {:.6}{validation_text}{kept}  ({:.0} s)",
+            p.epoch + 1,
+            p.loss,
             started.elapsed().as_secs_f64()
         );
         // a hidden bar (output not a terminal, e.g. a log file) prints nothing: log plainly
@@ -183,30 +220,29 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         } else {
             bar.println(line);
         }
-        last = epoch_loss;
-    }
+    })
+    .with_context(|| format!("training (checkpoint {})", checkpoint.display()))?;
     bar.finish();
-    let kept = match trainer.best_validation() {
+    let kept = match run.state.best_validation {
         Some(best) => format!("the best epoch's weights (validation loss {best:.6})"),
         None => {
-            write_weights(&trainer, &args.output)?;
+            let mut weights = task.checkpoint()?;
+            weights.header.training = Some(run.state);
+            weights
+                .save(&args.output)
+                .with_context(|| format!("writing {}", args.output.display()))?;
             "the last epoch's weights".into()
         }
     };
     println!(
-        "wrote {} ({kept}) after {} epochs ({} steps), final mean loss {last:.6}, {:.1} s",
+        "wrote {} ({kept}) after {} epochs ({} steps), final mean loss {:.6}, {:.1} s",
         args.output.display(),
-        trainer.epoch(),
-        trainer.steps(),
+        run.state.epochs_completed,
+        run.state.step,
+        run.history.last().map_or(f64::NAN, |p| p.loss),
         started.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-fn write_weights(trainer: &Trainer, output: &Path) -> Result<()> {
-    trainer
-        .save_weights(output)
-        .with_context(|| format!("writing {}", output.display()))
 }
 
 /// Splits `names` into training and `count` validation shapes, spread evenly over the list (a

@@ -16,11 +16,13 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_data::{
-    Expression, FaceIdentity, FaceSetConfig, FaceTemplate, HandPose, HandSetConfig, HandShape,
-    HandTemplate, LidarConfig, Manifest, ShapeFamily, View, contact_sheet, hand_splits,
-    intensity_scales, lidar_scene, noisy_scan, shape_mesh, write_manifest, write_png,
+    Expression, ExpressionLabels, FaceIdentity, FaceSetConfig, FaceTemplate, HandPose,
+    HandSetConfig, HandShape, HandTemplate, LidarConfig, MAX_FACE_SUBJECTS, MAX_HAND_SUBJECTS,
+    MAX_LIDAR_SCENES, MAX_SHAPE_RESOLUTION, MAX_SHAPES_PER_FAMILY, Manifest, SequenceStats,
+    ShapeFamily, View, contact_sheet, hand_splits, lidar_scene, noisy_scan, shape_mesh,
+    write_manifest, write_png,
 };
-use meshgnn_geometry::{TriMesh, write_mesh, write_point_cloud};
+use meshgnn_geometry::{TriMesh, check_count, write_mesh, write_point_cloud};
 use rayon::prelude::*;
 use serde_json::json;
 
@@ -87,7 +89,7 @@ enum Command {
         /// Grid cells along the longest side (96 ≈ 30-90k faces).
         #[arg(long, default_value_t = 96)]
         resolution: usize,
-        /// Gaussian noise σ of the noisy variants, as a fraction of the bounding-box diagonal.
+        /// Gaussian noise σ of the noisy variants, as a fraction of the bounding-sphere radius.
         #[arg(long, default_value_t = 0.005)]
         noise: f64,
         /// LiDAR scenes to write (≈2 M points each).
@@ -130,6 +132,12 @@ fn hands(
     pose_free: bool,
     preview_path: &Option<PathBuf>,
 ) -> Result<()> {
+    check_count(
+        "-n",
+        count,
+        1..=MAX_HAND_SUBJECTS,
+        "one mesh file per subject",
+    )?;
     let cfg = HandSetConfig {
         count,
         seed,
@@ -204,6 +212,18 @@ fn faces(
     frame_step: usize,
     preview_path: &Option<PathBuf>,
 ) -> Result<()> {
+    check_count(
+        "-n",
+        count,
+        1..=MAX_FACE_SUBJECTS,
+        "about 100 mesh files per subject",
+    )?;
+    check_count(
+        "--frame-step",
+        frame_step,
+        1..=100,
+        "keep every k-th frame of the 60-100 frame sequences",
+    )?;
     let cfg = FaceSetConfig {
         subjects: count,
         seed,
@@ -258,16 +278,27 @@ fn faces(
         })
         .collect::<Result<Vec<_>>>()?;
     bar.finish();
-    let all: Vec<(Expression, f64)> = subjects
-        .iter()
-        .flat_map(|s| s.1.iter().map(|x| (x.0, x.1)))
-        .collect();
-    let scales = intensity_scales(&all);
+    // eq. 4.3's intensity scales over every sequence of every subject
+    let sequence_labels = ExpressionLabels::new(
+        &subjects
+            .iter()
+            .map(|s| {
+                s.1.iter()
+                    .map(
+                        |&(expression, mean_abs_deformation, extremeness)| SequenceStats {
+                            expression,
+                            mean_abs_deformation,
+                            extremeness,
+                        },
+                    )
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>(),
+    )?;
     let mut splits: BTreeMap<String, Vec<String>> = BTreeMap::new();
     let mut labels = BTreeMap::new();
-    let mut next = 0;
     let mut previews = Vec::new();
-    for (subject, (frames, stats, neutral, split, apex)) in subjects.into_iter().enumerate() {
+    for (subject, (frames, _, neutral, split, apex)) in subjects.into_iter().enumerate() {
         splits
             .entry(split.to_string())
             .or_default()
@@ -276,21 +307,15 @@ fn faces(
             neutral,
             json!({ "subject": subject, "expression": "neutral" }),
         );
-        let mut s_of = BTreeMap::new();
-        for (e, m, x) in &stats {
-            s_of.insert(*e, (scales.get(next).copied().unwrap_or(0.5), *m, *x));
-            next += 1;
-        }
         for (name, split, e, frame, motion) in frames {
-            let (s_i, m_i, extremeness) = s_of.get(&e).copied().unwrap_or((0.5, 0.0, 0.0));
-            let mut onehot = [0.0f64; 6];
-            onehot[e.index()] = motion * s_i;
+            let l = sequence_labels.label(subject, e, motion)?;
             labels.insert(
                 name.clone(),
                 json!({
                     "subject": subject, "expression": e.name(), "frame": frame,
-                    "motion": motion, "intensity": s_i, "label": onehot,
-                    "mean_abs_deformation_mm": m_i, "extremeness": extremeness,
+                    "motion": motion, "intensity": l.intensity, "label": l.label,
+                    "mean_abs_deformation_mm": l.mean_abs_deformation,
+                    "extremeness": l.extremeness,
                 }),
             );
             splits.entry(split.to_string()).or_default().push(name);
@@ -328,6 +353,27 @@ fn shapes(
     lidar: usize,
     preview_path: &Option<PathBuf>,
 ) -> Result<()> {
+    check_count(
+        "--per-family",
+        per_family,
+        1..=MAX_SHAPES_PER_FAMILY,
+        "shapes of each of the 5 families",
+    )?;
+    check_count(
+        "--resolution",
+        resolution,
+        8..=MAX_SHAPE_RESOLUTION,
+        "grid cells along the longest side; memory grows with its cube",
+    )?;
+    check_count(
+        "--lidar",
+        lidar,
+        0..=MAX_LIDAR_SCENES,
+        "2 M points per scene",
+    )?;
+    if !(noise >= 0.0 && noise.is_finite()) {
+        anyhow::bail!("--noise {noise}: must be a finite fraction of the sphere radius >= 0");
+    }
     create_dir(output)?;
     let jobs: Vec<(ShapeFamily, usize)> = ShapeFamily::ALL
         .iter()
@@ -368,7 +414,7 @@ fn shapes(
         labels.insert(name, json!({ "family": family.name(), "faces": faces }));
         labels.insert(
             noisy_name,
-            json!({ "family": family.name(), "noise_sigma_of_diagonal": noise }),
+            json!({ "family": family.name(), "noise_sigma_of_radius": noise }),
         );
         if let Some((m, n)) = keep {
             previews.push(m);
