@@ -13,10 +13,11 @@
 
 use rayon::prelude::*;
 
+use crate::curvature_neighbourhoods::curvature_neighbourhoods;
 use crate::error::{Error, Result};
-use crate::knn::{build_tree, for_each_neighbour};
 use crate::normalization::centroid;
 use crate::pca_normals::CovarianceAt;
+use crate::spatial_index::Neighbours;
 
 /// Per-point features of eq. 5.1-5.3, each `#P` long.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -71,29 +72,24 @@ pub fn curvature_features_with_h(
 }
 
 fn compute(points: &[[f32; 3]], k: usize, h: Option<f64>) -> Result<CurvatureFeatures> {
-    let (tree, query) = build_tree(points, k)?;
-    let center = centroid(points);
     // One query per point: neighbours and squared distances, #P×k.
-    let mut neighbours = vec![0u32; points.len() * k];
-    let mut distances = vec![0f32; points.len() * k];
-    let (normals, curvature): (Vec<[f32; 3]>, Vec<f32>) = neighbours
-        .par_chunks_mut(k)
-        .zip(distances.par_chunks_mut(k))
-        .enumerate()
-        .map(|(i, (ids, dists))| {
-            let mut covariance = CovarianceAt::new(points[i]);
-            let mut slot = 0;
-            for_each_neighbour(&tree, points, i, query, |j, d| {
-                if let (Some(id), Some(dist)) = (ids.get_mut(slot), dists.get_mut(slot)) {
-                    *id = j as u32;
-                    *dist = d;
+    let Neighbours {
+        indices: neighbours,
+        squared_distances: distances,
+        ..
+    } = curvature_neighbourhoods(points, k)?;
+    let center = centroid(points);
+    let (normals, curvature): (Vec<[f32; 3]>, Vec<f32>) =
+        (points.par_iter(), neighbours.par_chunks(k))
+            .into_par_iter()
+            .map(|(&p, ids)| {
+                let mut covariance = CovarianceAt::new(p);
+                for &j in ids {
+                    covariance.add(points[j as usize]);
                 }
-                slot += 1;
-                covariance.add(points[j]);
-            });
-            covariance.normal_and_curvature(center)
-        })
-        .unzip();
+                covariance.normal_and_curvature(center)
+            })
+            .unzip();
     let h = match h {
         Some(h) => h,
         None => {
@@ -221,5 +217,23 @@ mod tests {
         for (x, y) in a.mean_curvature.iter().zip(&b.mean_curvature) {
             assert!((x - y).abs() < 1e-4 * x.abs().max(1e-3));
         }
+    }
+
+    #[test]
+    fn identical_and_collinear_clouds_of_200k_points_are_flat() {
+        // Degenerate inputs in O(n log n): all neighbours coincide (covariance 0) or lie on
+        // one line (rank 1), so every curvature is 0.
+        let n = 200_000;
+        let same = vec![[0.5f32, -1.0, 2.0]; n];
+        let f = curvature_features(&same, 16).unwrap();
+        assert!(
+            f.curvature
+                .iter()
+                .chain(&f.mean_curvature)
+                .all(|&c| c == 0.0)
+        );
+        let line: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 * 0.25, 0.0, 0.0]).collect();
+        let f = curvature_features(&line, 16).unwrap();
+        assert!(f.curvature.iter().chain(&f.roughness).all(|&c| c == 0.0));
     }
 }

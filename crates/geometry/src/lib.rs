@@ -24,12 +24,12 @@ mod boundary_loops;
 mod connected_components;
 mod cotangent_laplacian;
 mod curvature_features;
+mod curvature_neighbourhoods;
 mod degenerate_faces;
 mod duplicate_faces;
 mod edge_topology;
 mod face_normals;
 mod graph_laplacian;
-mod knn;
 mod laplacian_eigenvectors;
 mod manifold;
 mod mass_matrix;
@@ -37,6 +37,7 @@ mod mesh_report;
 mod non_manifold_edges;
 mod normalization;
 mod pca_normals;
+mod spatial_index;
 mod surface_sampling;
 mod symmetric_eigen3;
 mod tangent_chart_triangulation;
@@ -59,6 +60,7 @@ pub use boundary_loops::boundary_loops;
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use cotangent_laplacian::cotangent_laplacian;
 pub use curvature_features::{CurvatureFeatures, curvature_features, curvature_features_with_h};
+pub use curvature_neighbourhoods::curvature_neighbourhoods;
 pub use degenerate_faces::degenerate_faces;
 pub use duplicate_faces::duplicate_faces;
 pub use edge_topology::{EdgeIncidence, EdgeTopology, edge_topology};
@@ -74,6 +76,10 @@ pub use mesh_report::{MeshReport, mesh_report};
 pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
+pub use spatial_index::{
+    DEFAULT_LEAF_SIZE, Neighbours, SpatialIndex, SpatialNode, box_squared_distance,
+    squared_distance,
+};
 pub use surface_sampling::{SurfaceSamples, sample_surface};
 pub use symmetric_eigen3::symmetric_eigen3;
 pub use tangent_chart_triangulation::{

@@ -14,8 +14,8 @@
 
 use rayon::prelude::*;
 
+use crate::curvature_neighbourhoods::curvature_neighbourhoods;
 use crate::error::Result;
-use crate::knn::{build_tree, for_each_neighbour};
 use crate::normalization::centroid;
 use crate::symmetric_eigen3::symmetric_eigen3;
 use crate::vec3::{dot, sub, to_f64};
@@ -41,13 +41,15 @@ pub struct PcaFeatures {
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn pca_normals_and_curvature(points: &[[f32; 3]], k: usize) -> Result<PcaFeatures> {
-    let (tree, query) = build_tree(points, k)?;
+    let neighbours = curvature_neighbourhoods(points, k)?;
     let center = centroid(points);
-    let (normals, curvature) = (0..points.len())
+    let (normals, curvature) = (points.par_iter(), neighbours.indices.par_chunks(k))
         .into_par_iter()
-        .map(|i| {
-            let mut covariance = CovarianceAt::new(points[i]);
-            for_each_neighbour(&tree, points, i, query, |j, _| covariance.add(points[j]));
+        .map(|(&p, row)| {
+            let mut covariance = CovarianceAt::new(p);
+            for &j in row {
+                covariance.add(points[j as usize]);
+            }
             covariance.normal_and_curvature(center)
         })
         .unzip();

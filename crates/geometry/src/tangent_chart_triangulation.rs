@@ -31,14 +31,13 @@
 //! - Every input point is an output vertex (possibly unreferenced, counted in the result).
 
 use std::collections::HashSet;
-use std::num::NonZero;
 
 use rayon::prelude::*;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
 
 use crate::boundary_loops::boundary_loops;
+use crate::curvature_neighbourhoods::curvature_neighbourhoods;
 use crate::error::{Error, Result};
-use crate::knn::{PointTree, build_tree, for_each_neighbour};
 use crate::normalization::centroid;
 use crate::pca_normals::CovarianceAt;
 use crate::tri_mesh::{TriMesh, check_finite, check_len};
@@ -116,8 +115,7 @@ pub fn tangent_chart_triangulation(
         });
     }
     let k = options.neighbours.min(n - 1).max(2);
-    let (tree, query) = build_tree(points, k)?;
-    let neighbours = neighbour_lists(&tree, points, k, query);
+    let neighbours = curvature_neighbourhoods(points, k)?.indices;
     let mut oriented = pca_normals(points, &neighbours, k);
     match normals {
         Some(given) => {
@@ -150,26 +148,6 @@ pub fn tangent_chart_triangulation(
         normals: oriented.iter().map(|v| v.map(|x| x as f32)).collect(),
         mesh,
     })
-}
-
-/// The `k` nearest other points of every point, flat `#P·k` (`u32::MAX` pads a short row).
-fn neighbour_lists(
-    tree: &PointTree,
-    points: &[[f32; 3]],
-    k: usize,
-    query: NonZero<usize>,
-) -> Vec<u32> {
-    let mut out = vec![u32::MAX; points.len() * k];
-    out.par_chunks_mut(k).enumerate().for_each(|(i, row)| {
-        let mut slot = 0;
-        for_each_neighbour(tree, points, i, query, |j, _| {
-            if let Some(s) = row.get_mut(slot) {
-                *s = j as u32;
-                slot += 1;
-            }
-        });
-    });
-    out
 }
 
 /// Row `i` of the flat neighbour lists, without padding.

@@ -18,8 +18,7 @@
 
 use std::time::Instant;
 
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use meshgnn_geometry::{TriMesh, icosphere, read_mesh, write_mesh};
+use meshgnn_geometry::{SpatialIndex, TriMesh, icosphere, read_mesh, write_mesh};
 use meshgnn_graph::{DecimationOptions, Target, decimate};
 use rayon::prelude::*;
 
@@ -72,14 +71,19 @@ fn samples(vertices: &[[f32; 3]], triangles: &[[u32; 3]], h: f64) -> Vec<[f32; 3
 }
 
 /// (max, mean) distance from each point of `from` to its nearest point of `to`.
-fn one_sided(from: &[[f32; 3]], to: &[[f32; 3]]) -> (f64, f64) {
-    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(to);
+fn one_sided(from: &[[f32; 3]], to: &[[f32; 3]]) -> Result<(f64, f64), meshgnn_geometry::Error> {
+    let index = SpatialIndex::new(to)?;
     let d: Vec<f64> = from
         .par_iter()
-        .map(|p| f64::from(tree.nearest_one::<SquaredEuclidean>(p).distance).sqrt())
+        .map_init(Vec::new, |found, p| {
+            index.nearest(p, 1, None, found);
+            found
+                .first()
+                .map_or(f64::INFINITY, |&(d, _)| f64::from(d).sqrt())
+        })
         .collect();
     let max = d.iter().copied().fold(0.0, f64::max);
-    (max, d.iter().sum::<f64>() / d.len().max(1) as f64)
+    Ok((max, d.iter().sum::<f64>() / d.len().max(1) as f64))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -192,8 +196,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.extend(used);
         s
     };
-    let (ab_max, ab_mean) = one_sided(&a, &b);
-    let (ba_max, ba_mean) = one_sided(&b, &a);
+    let (ab_max, ab_mean) = one_sided(&a, &b)?;
+    let (ba_max, ba_mean) = one_sided(&b, &a)?;
     let (lo, hi) = mesh
         .vertices()
         .iter()

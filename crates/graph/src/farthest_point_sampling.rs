@@ -16,7 +16,9 @@
 //! - Deterministic: chunked parallel updates reduce with the same total order, so any thread
 //!   count gives the same sequence.
 //!
-//! Cost O(N·k) time, O(N) memory.
+//! Cost O(N·k) time, O(N) memory; O(N·d) when only `d < k` distinct positions exist (once
+//! every remaining distance is 0 the rest of the sequence is known: the unselected points in
+//! index order).
 
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use rayon::prelude::*;
@@ -176,6 +178,20 @@ pub fn farthest_point_sampling(
             );
         current = best.1;
         selected.push(current);
+        if best.0 == 0.0 {
+            // Every unselected point now coincides with a selected one: their distances stay 0
+            // and ties go to the smallest index, so the rest follow in index order. One O(N)
+            // pass instead of O(N) per pick on duplicate-heavy clouds.
+            distances[current as usize] = SELECTED;
+            let missing = k - selected.len();
+            selected.extend(
+                (0..n as u32)
+                    .zip(&distances)
+                    .filter(|&(_, &d)| d != SELECTED)
+                    .map(|(i, _)| i)
+                    .take(missing),
+            );
+        }
     }
     Ok(selected)
 }
@@ -253,6 +269,25 @@ mod tests {
                 assert_eq!(got, naive(&pts, dim, k, start), "seed {seed} dim {dim}");
             }
         }
+    }
+
+    #[test]
+    fn identical_points_are_sampled_in_linear_time() {
+        // 200k copies of one point: after the start, index order. Without the shortcut this
+        // is 10¹⁰ distance updates; with it, one pass.
+        let n = 200_000;
+        let pts: Vec<f32> = [0.5f32, -1.0, 2.0].repeat(n);
+        let got = farthest_point_sampling(&pts, 3, n / 2, FpsStart::Index(7)).unwrap();
+        let want: Vec<u32> = std::iter::once(7)
+            .chain((0..n as u32).filter(|&i| i != 7))
+            .take(n / 2)
+            .collect();
+        assert_eq!(got, want);
+        // Two distinct positions (a collinear pair of clusters): both, then index order.
+        let mut two = [0.0f32, 0.0, 0.0].repeat(n);
+        two[3 * 5..3 * 6].copy_from_slice(&[4.0, 0.0, 0.0]);
+        let got = farthest_point_sampling(&two, 3, 4, FpsStart::Index(0)).unwrap();
+        assert_eq!(got, vec![0, 5, 1, 2]);
     }
 
     #[test]

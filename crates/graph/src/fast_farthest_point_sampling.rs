@@ -8,7 +8,7 @@
 //! point `s` is selected, a node is skipped when the squared distance from `s` to its box is at
 //! least that maximum: no point inside can get closer to `s` than to the set already selected,
 //! so none of its distances changes. Skipping is exact because the box bound never exceeds the
-//! computed distance of a point inside (see the crate's kd-tree notes), and distances use the
+//! computed distance of a point inside (see [`meshgnn_geometry::SpatialIndex`]'s notes), and distances use the
 //! very expression of the exact version. The next point is the root's maximum.
 //!
 //! # Conventions
@@ -23,18 +23,18 @@
 //! parallel. Memory: about 24 bytes per point plus the tree. Measured against exact FPS and
 //! fpsample in `docs/graph.md`.
 
+use meshgnn_geometry::{SpatialIndex, box_squared_distance, squared_distance};
 use rayon::prelude::*;
 
 use crate::Result;
 use crate::farthest_point_sampling::{FpsStart, SELECTED, better, check_fps_input};
-use crate::kd_tree::{KdTree, box_lower_bound, squared_distance};
 
 /// Leaf size of the tree: points rescanned when a leaf is touched vs nodes visited (not tuned).
 const LEAF_SIZE: usize = 32;
 
 /// Mutable FPS state over the tree.
 struct FpsState<'a> {
-    tree: &'a KdTree,
+    tree: &'a SpatialIndex,
     /// Current distance of each reordered point to the selected set.
     dist: Vec<f32>,
     /// Per node: largest `(distance, index)` of its points, ties to the smaller index.
@@ -45,18 +45,18 @@ impl FpsState<'_> {
     /// Lowers the distances of the points of `node` that are closer to `q` (at slot `slot`,
     /// whose own distance was just set to [`SELECTED`]) and refreshes the node maxima.
     fn update(&mut self, node: usize, q: &[f32; 3], slot: u32) {
-        let nd = self.tree.nodes[node];
+        let nd = self.tree.nodes()[node];
         let contains = nd.start <= slot && slot < nd.end;
-        if !contains && box_lower_bound(q, &nd.lo, &nd.hi) >= self.node_max[node].0 {
+        if !contains && box_squared_distance(q, &nd.lo, &nd.hi) >= self.node_max[node].0 {
             return;
         }
-        if node >= self.tree.first_leaf {
+        if node >= self.tree.first_leaf() {
             let (s, e) = (nd.start as usize, nd.end as usize);
             let mut best = (f32::NEG_INFINITY, u32::MAX);
-            for ((p, d), &id) in self.tree.points[s..e]
+            for ((p, d), &id) in self.tree.slot_points()[s..e]
                 .iter()
                 .zip(&mut self.dist[s..e])
-                .zip(&self.tree.ids[s..e])
+                .zip(&self.tree.slot_ids()[s..e])
             {
                 let nd2 = squared_distance(p, q);
                 if nd2 < *d {
@@ -104,15 +104,15 @@ pub fn fast_farthest_point_sampling(
         return Ok(Vec::new());
     }
     let first = start.resolve(n)?;
-    let tree = KdTree::new(points, LEAF_SIZE);
+    let tree = SpatialIndex::with_leaf_size(points, LEAF_SIZE)?;
     let mut slot_of = vec![0u32; n];
-    for (slot, &id) in tree.ids.iter().enumerate() {
+    for (slot, &id) in tree.slot_ids().iter().enumerate() {
         slot_of[id as usize] = slot as u32;
     }
     let mut state = FpsState {
         tree: &tree,
         dist: vec![f32::INFINITY; n],
-        node_max: vec![(f32::INFINITY, 0); tree.nodes.len()],
+        node_max: vec![(f32::INFINITY, 0); tree.nodes().len()],
     };
     let mut selected = Vec::with_capacity(k);
     let mut current = first;
@@ -120,7 +120,7 @@ pub fn fast_farthest_point_sampling(
     while selected.len() < k {
         let slot = slot_of[current as usize];
         state.dist[slot as usize] = SELECTED;
-        let q = tree.points[slot as usize];
+        let q = tree.slot_points()[slot as usize];
         state.update(0, &q, slot);
         current = state.node_max[0].1;
         selected.push(current);
@@ -242,5 +242,22 @@ mod tests {
         assert!(fast_farthest_point_sampling(&a, 10, FpsStart::Index(3000)).is_err());
         let nan = [[0.0f32; 3], [f32::NAN, 0.0, 0.0]];
         assert!(fast_farthest_point_sampling(&nan, 1, FpsStart::Index(0)).is_err());
+    }
+
+    #[test]
+    fn identical_and_collinear_clouds_of_200k_points() {
+        let n = 200_000;
+        let same = vec![[1.0f32, 2.0, 3.0]; n];
+        let got = fast_farthest_point_sampling(&same, 1000, FpsStart::Index(3)).unwrap();
+        let want: Vec<u32> = std::iter::once(3)
+            .chain((0..n as u32).filter(|&i| i != 3))
+            .take(1000)
+            .collect();
+        assert_eq!(got, want);
+        // A line: the far end, then the middle (tied with its right neighbour: smaller index).
+        let line: Vec<[f32; 3]> = (0..n).map(|i| [i as f32, 0.0, 0.0]).collect();
+        let got = fast_farthest_point_sampling(&line, 5, FpsStart::Index(0)).unwrap();
+        assert_eq!(got[..3], [0, 199_999, 99_999]);
+        assert_eq!(got, exact(&line, 5, FpsStart::Index(0)));
     }
 }

@@ -1,6 +1,8 @@
 //! k-nearest-neighbour graphs over 3-d points: the graph of the point-cloud projector's GNN
 //! layer (thesis eq. 5.4, k = 7), of AttRef (eq. 5.5, k = 15), of the edge predictor's extended
-//! adjacency (ch. 6.3, k = 15) and the queries of the Chamfer distances.
+//! adjacency (ch. 6.3, k = 15) and the queries of the Chamfer distances. Thin wrappers over
+//! [`meshgnn_geometry::SpatialIndex`], the workspace's one spatial index: build the index
+//! yourself to query the same points several times.
 //!
 //! # Conventions
 //! - `indices` is `#Q×k` row-major `u32`; row `i` lists the neighbours of point (query) `i`
@@ -9,42 +11,12 @@
 //!   independent of the thread count.
 //! - [`knn_graph`] excludes the point itself (by index; coincident duplicates are neighbours
 //!   at distance 0).
+//! - O(P log P) on any input, duplicate and collinear points included (see the index's notes).
 
-use rayon::prelude::*;
+pub use meshgnn_geometry::Neighbours;
+use meshgnn_geometry::SpatialIndex;
 
-use crate::kd_tree::KdTree;
-use crate::knn_index::KnnIndex;
 use crate::{Error, Result};
-
-/// The result of a k-NN query: `k` neighbours per query point.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Neighbours {
-    /// Neighbours per row.
-    pub k: usize,
-    /// `#Q×k` neighbour indices, nearest first, ties by index.
-    pub indices: Vec<u32>,
-    /// `#Q×k` squared distances aligned with `indices`.
-    pub squared_distances: Vec<f32>,
-}
-
-impl Neighbours {
-    /// Number of query points (rows).
-    pub fn len(&self) -> usize {
-        self.indices.len().checked_div(self.k).unwrap_or(0)
-    }
-
-    /// True when there are no rows.
-    pub fn is_empty(&self) -> bool {
-        self.indices.is_empty()
-    }
-
-    /// The neighbour indices of row `i` (empty when out of range).
-    pub fn row(&self, i: usize) -> &[u32] {
-        self.indices
-            .get(i * self.k..(i + 1) * self.k)
-            .unwrap_or(&[])
-    }
-}
 
 /// Checks that every coordinate is finite; the error names the first bad point.
 pub(crate) fn check_finite(points: &[[f32; 3]], what: &'static str) -> Result<()> {
@@ -66,7 +38,7 @@ pub(crate) fn check_u32_len(len: usize, what: &'static str) -> Result<()> {
 }
 
 /// The k-NN graph of `points: #P×3`: for each point its `k` nearest *other* points
-/// (ch. 5.3.2, eq. 5.4: "k-nearest neighbours graph, k = 7"). O(P log P) expected, parallel.
+/// (ch. 5.3.2, eq. 5.4: "k-nearest neighbours graph, k = 7"). O(P log P), parallel.
 ///
 /// Errors when `k == 0`, `k >= #P`, or a coordinate is NaN/infinite.
 ///
@@ -85,13 +57,15 @@ pub fn knn_graph(points: &[[f32; 3]], k: usize) -> Result<Neighbours> {
             message: format!("must be in 1..{} for {} points", points.len(), points.len()),
         });
     }
-    KnnIndex::new(points)?.graph(k)
+    check_u32_len(points.len(), "points")?;
+    check_finite(points, "point")?;
+    Ok(SpatialIndex::new(points)?.knn_graph(k)?)
 }
 
 /// For each of `queries: #Q×3`, its `k` nearest of `points: #P×3` (a query coinciding with a
 /// point finds it at distance 0). Used by the Chamfer distances (eq. 5.6-5.7) and AttRef
-/// (eq. 5.5). O((P + Q) log P) expected, parallel over queries. Build a [`KnnIndex`] instead
-/// to query the same points several times.
+/// (eq. 5.5). O((P + Q) log P), parallel over queries. Build a [`SpatialIndex`] instead to
+/// query the same points several times.
 ///
 /// Errors when `k == 0`, `k > #P`, or a coordinate is NaN/infinite.
 ///
@@ -113,47 +87,16 @@ pub fn knn_query(queries: &[[f32; 3]], points: &[[f32; 3]], k: usize) -> Result<
             ),
         });
     }
-    KnnIndex::new(points)?.query(queries, k)
-}
-
-/// Runs one k-NN query per row of `queries`, in parallel; `exclude_self` skips index `i` for
-/// query `i`. Every query finds `k` results (callers checked `k` against the tree size).
-pub(crate) fn run_queries(
-    tree: &KdTree,
-    queries: &[[f32; 3]],
-    k: usize,
-    exclude_self: bool,
-) -> Neighbours {
-    let mut indices = vec![0u32; queries.len() * k];
-    let mut squared_distances = vec![0.0f32; queries.len() * k];
-    indices
-        .par_chunks_mut(k)
-        .zip(squared_distances.par_chunks_mut(k))
-        .enumerate()
-        .for_each_init(
-            || Vec::with_capacity(k + 1),
-            |found, (i, (idx, dist))| {
-                let exclude = exclude_self.then_some(i as u32);
-                tree.nearest(&queries[i], k, exclude, found);
-                for ((slot_i, slot_d), &(d, j)) in
-                    idx.iter_mut().zip(dist.iter_mut()).zip(found.iter())
-                {
-                    *slot_i = j;
-                    *slot_d = d;
-                }
-            },
-        );
-    Neighbours {
-        k,
-        indices,
-        squared_distances,
-    }
+    check_u32_len(points.len(), "points")?;
+    check_finite(points, "point")?;
+    check_finite(queries, "query")?;
+    Ok(SpatialIndex::new(points)?.knn(queries, k)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kd_tree::squared_distance;
+    use meshgnn_geometry::squared_distance;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     fn brute(queries: &[[f32; 3]], points: &[[f32; 3]], k: usize, exclude_self: bool) -> Vec<u32> {
@@ -223,19 +166,19 @@ mod tests {
     fn index_graph_and_query_equal_the_free_functions() {
         let pts = random_points(6, 600, true);
         let queries = random_points(7, 150, false);
-        let index = KnnIndex::new(&pts).unwrap();
+        let index = SpatialIndex::new(&pts).unwrap();
         for k in [1, 7, 15] {
-            let g = index.graph(k).unwrap();
+            let g = index.knn_graph(k).unwrap();
             assert_eq!(g, knn_graph(&pts, k).unwrap(), "graph k {k}");
             assert_eq!(g.indices, brute(&pts, &pts, k, true), "graph k {k}");
-            let q = index.query(&queries, k).unwrap();
+            let q = index.knn(&queries, k).unwrap();
             assert_eq!(q, knn_query(&queries, &pts, k).unwrap(), "query k {k}");
             assert_eq!(q.indices, brute(&queries, &pts, k, false), "query k {k}");
         }
         assert_eq!(index.len(), 600);
-        assert!(index.graph(600).is_err());
-        assert!(index.query(&queries, 601).is_err());
-        assert!(index.query(&[[f32::NAN, 0.0, 0.0]], 1).is_err());
+        assert!(index.knn_graph(600).is_err());
+        assert!(index.knn(&queries, 601).is_err());
+        assert!(index.knn(&[[f32::NAN, 0.0, 0.0]], 1).is_err());
     }
 
     #[test]
@@ -257,5 +200,24 @@ mod tests {
             Err(Error::NonFinite { index: 1, .. })
         ));
         assert!(knn_query(&[[0.0; 3]], &pts, 3).is_err());
+    }
+
+    #[test]
+    fn identical_and_collinear_clouds_of_200k_points() {
+        // Degenerate inputs in O(n log n) (without the index's smallest-index pruning the
+        // identical cloud costs 4·10¹⁰ distance evaluations).
+        let n = 200_000;
+        let same = vec![[0.5f32, 0.5, 0.5]; n];
+        let nn = knn_graph(&same, 7).unwrap();
+        assert_eq!(nn.row(0), &[1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(nn.row(n - 1), &[0, 1, 2, 3, 4, 5, 6]);
+        assert!(nn.squared_distances.iter().all(|&d| d == 0.0));
+        // Equally spaced on a line: both neighbours at each distance, the smaller index first.
+        let line: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 * 0.5, 0.0, 0.0]).collect();
+        let nn = knn_graph(&line, 4).unwrap();
+        assert_eq!(nn.row(1000), &[999, 1001, 998, 1002]);
+        assert_eq!(nn.row(0), &[1, 2, 3, 4]);
+        let q = knn_query(&same[..10], &line, 2).unwrap();
+        assert_eq!(q.row(9), &[1, 0]);
     }
 }

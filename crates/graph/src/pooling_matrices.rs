@@ -12,12 +12,11 @@
 //!   identity.
 //! - Features are row-major `(N, C)` slices, as in [`crate::CsrMatrix::mul_dense`].
 
-use meshgnn_geometry::TriMesh;
+use meshgnn_geometry::{SpatialIndex, TriMesh, squared_distance};
 use rayon::prelude::*;
 
 use crate::closest_point_on_triangle::closest_point_on_triangle;
 use crate::error::{Error, Result};
-use crate::kd_tree::KdTree;
 use crate::{CsrMatrix, Decimation};
 
 /// Down-sampling `D: M×N`, stored as the selected fine vertices.
@@ -212,12 +211,12 @@ pub fn pooling_matrices(fine: &TriMesh, decimation: &Decimation) -> Result<Pooli
         .zip(&centroids)
         .map(|(f, c)| {
             f.iter()
-                .map(|&v| crate::kd_tree::squared_distance(c, &cv[v as usize]))
+                .map(|&v| squared_distance(c, &cv[v as usize]))
                 .fold(0.0f32, f32::max)
                 .sqrt()
         })
         .fold(0.0f32, f32::max);
-    let tree = KdTree::new(&centroids, 16);
+    let tree = SpatialIndex::new(&centroids)?;
     let coarse_of: Vec<u32> = {
         let mut inverse = vec![u32::MAX; fine.vertex_count()];
         for (j, &i) in kept.iter().enumerate() {

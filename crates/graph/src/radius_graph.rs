@@ -6,15 +6,14 @@
 //! CSR layout: row `i` is `offsets[i]..offsets[i+1]` of `indices` / `squared_distances`,
 //! sorted by `(squared distance, index)`, the point itself excluded, points at exactly the
 //! radius included. `max_neighbours` keeps the nearest ones only (ball query with a cap).
+//! - Queries go to [`meshgnn_geometry::SpatialIndex`]; with a cap each row costs a k-NN query
+//!   however many points share the ball (duplicates), without one the cost follows the output.
 
+use meshgnn_geometry::SpatialIndex;
 use rayon::prelude::*;
 
-use crate::kd_tree::KdTree;
 use crate::knn_graph::{check_finite, check_u32_len};
 use crate::{Error, Result};
-
-/// Leaf size of the kd-tree.
-const LEAF_SIZE: usize = 16;
 
 /// Neighbours within a radius, per point, in CSR layout.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -38,7 +37,8 @@ impl RadiusNeighbours {
 }
 
 /// For each of `points: #P×3`, the other points within `radius` (inclusive), nearest first,
-/// at most `max_neighbours` of them when given. O(P log P + output), parallel.
+/// at most `max_neighbours` of them when given. O(P log P + output), parallel; with
+/// `max_neighbours = m`, O(P (log P + m)) whatever the density (duplicates included).
 ///
 /// Errors when `radius` is negative or not finite, or a coordinate is NaN/infinite.
 ///
@@ -63,16 +63,17 @@ pub fn radius_graph(
     }
     check_u32_len(points.len(), "points")?;
     check_finite(points, "point")?;
-    let tree = KdTree::new(points, LEAF_SIZE);
+    let index = SpatialIndex::new(points)?;
     let r2 = radius * radius;
-    let cap = max_neighbours.unwrap_or(usize::MAX);
     let rows: Vec<Vec<(f32, u32)>> = points
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
             let mut found = Vec::new();
-            tree.within(p, r2, Some(i as u32), &mut found);
-            found.truncate(cap);
+            match max_neighbours {
+                Some(cap) => index.nearest_within(p, cap, r2, Some(i as u32), &mut found),
+                None => index.within(p, r2, Some(i as u32), &mut found),
+            }
             found
         })
         .collect();
@@ -98,7 +99,7 @@ pub fn radius_graph(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kd_tree::squared_distance;
+    use meshgnn_geometry::squared_distance;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     #[test]
@@ -137,5 +138,16 @@ mod tests {
             radius_graph(&[[0.0; 3]], 1.0, None).unwrap().row(0),
             &[] as &[u32]
         );
+    }
+
+    #[test]
+    fn capped_ball_query_on_200k_identical_points() {
+        // Every point is in every ball; the cap keeps each row a k-NN query.
+        let n = 200_000;
+        let same = vec![[0.0f32, 1.0, 0.0]; n];
+        let g = radius_graph(&same, 0.1, Some(3)).unwrap();
+        assert_eq!(g.row(0), &[1, 2, 3]);
+        assert_eq!(g.row(n - 1), &[0, 1, 2]);
+        assert_eq!(g.offsets.last(), Some(&(3 * n)));
     }
 }

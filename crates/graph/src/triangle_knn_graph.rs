@@ -4,14 +4,13 @@
 //!
 //! # Conventions
 //! As [`crate::knn_graph`]: `#F×k` row-major `u32` triangle indices, nearest first, ties to the
-//! smaller index, the triangle itself excluded. Barycentres are averaged in `f64`.
+//! smaller index, the triangle itself excluded. Barycentres are averaged in `f64`. The graph is
+//! [`meshgnn_geometry::SpatialIndex::knn_graph`] of the barycentres.
 
-use crate::kd_tree::KdTree;
-use crate::knn_graph::{check_finite, check_u32_len, run_queries};
+use meshgnn_geometry::SpatialIndex;
+
+use crate::knn_graph::{check_finite, check_u32_len};
 use crate::{Error, Neighbours, Result};
-
-/// Leaf size of the barycentre kd-tree.
-const LEAF_SIZE: usize = 16;
 
 /// Barycentres `#F×3` of `triangles: #F×3` over `vertices: #V×3`.
 ///
@@ -74,15 +73,14 @@ pub fn triangle_knn_graph(
     check_u32_len(triangles.len(), "triangles")?;
     check_finite(vertices, "vertex")?;
     let centres = triangle_barycentres(vertices, triangles)?;
-    let tree = KdTree::new(&centres, LEAF_SIZE);
-    Ok(run_queries(&tree, &centres, k, true))
+    Ok(SpatialIndex::new(&centres)?.knn_graph(k)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kd_tree::squared_distance;
     use meshgnn_geometry::icosphere;
+    use meshgnn_geometry::squared_distance;
 
     #[test]
     fn matches_brute_force_on_icosphere_faces() {

@@ -11,6 +11,10 @@ pub enum Error {
     #[error(transparent)]
     Geometry(#[from] meshgnn_geometry::Error),
 
+    /// An operation of the graph crate (k-NN graphs, sampling, ...) failed.
+    #[error(transparent)]
+    Graph(#[from] meshgnn_graph::Error),
+
     /// A tensor operation failed (wrong dtype, device, shape given to candle).
     #[error("tensor operation: {0}")]
     Tensor(#[from] candle_core::Error),

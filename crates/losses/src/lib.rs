@@ -12,7 +12,7 @@
 //! # Conventions
 //! - Points are `[f32; 3]`; every metric accumulates in `f64`, in parallel with a fixed
 //!   summation order, so results are identical for any thread count.
-//! - Nearest neighbours come from a kiddo k-d tree; in the losses they are computed outside
+//! - Nearest neighbours come from `meshgnn_geometry::SpatialIndex`; in the losses they are computed outside
 //!   the autograd graph and gathered with `index_select`, so losses are differentiable in the
 //!   positions and probabilities (piecewise, as the correspondences are fixed).
 //! - Every fallible function returns [`Error`], naming the input, element and problem.

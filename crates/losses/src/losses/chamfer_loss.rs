@@ -5,7 +5,7 @@ use crate::losses::tensor_points::{nearest_index_tensor, points_of, row_squared_
 use candle_core::Tensor;
 
 /// Per-point squared distance `(N)` from each row of `from: (N, 3)` to its nearest row of
-/// `to: (M, 3)`; the correspondence is found on detached values (kiddo) and gathered with
+/// `to: (M, 3)`; the correspondence is found on detached values (`SpatialIndex`) and gathered with
 /// `index_select`, so the result is differentiable in both point sets.
 pub(crate) fn directed_squared_distances(from: &Tensor, to: &Tensor) -> Result<Tensor> {
     let a = points_of("first points", from)?;

@@ -1,12 +1,13 @@
 //! The shared form of thesis eq. 6.11-6.13: `(1/|F_s|) Σ_t p_t m(t)`, where `m(t)` counts the
 //! nearby faces that face `t` conflicts with. Counts are computed on the detached geometry
-//! (they are integers); the loss is differentiable in the face probabilities.
+//! (they are integers); the loss is differentiable in the face probabilities. "Nearby" is the
+//! barycentre k-NN graph of the face classifier, [`meshgnn_graph::triangle_knn_graph`] (ch. 6.3).
 
 use crate::losses::tensor_points::check_vector;
-use crate::point_index::PointIndex;
 use crate::validate::{check_faces, check_points};
 use crate::{Error, Result};
 use candle_core::Tensor;
+use meshgnn_graph::triangle_knn_graph;
 use rayon::prelude::*;
 
 /// The corner positions of face `f`.
@@ -15,7 +16,8 @@ pub(crate) fn corners(vertices: &[[f32; 3]], f: &[u32; 3]) -> [[f32; 3]; 3] {
 }
 
 /// For each face, `m(t) = Σ_{u ∈ N_k(t)} conflict(t, u)` over its `k` nearest other faces by
-/// barycentre; then `(1/F) Σ_t p_t m(t)` with `face_probs: (F)`.
+/// barycentre (all others when fewer than `k`); then `(1/F) Σ_t p_t m(t)` with
+/// `face_probs: (F)`.
 pub(crate) fn face_penalty<C>(
     vertices: &[[f32; 3]],
     faces: &[[u32; 3]],
@@ -32,43 +34,37 @@ where
     }
     check_faces("faces", faces, vertices.len())?;
     check_vector("face probabilities", face_probs, faces.len())?;
-    let counts = conflict_counts(vertices, faces, k, conflict);
+    let counts = conflict_counts(vertices, faces, k, conflict)?;
     let m =
         Tensor::from_vec(counts, faces.len(), face_probs.device())?.to_dtype(face_probs.dtype())?;
     Ok(face_probs.mul(&m)?.mean_all()?)
 }
 
-/// `m(t)` for every face (see [`face_penalty`]), in parallel.
+/// `m(t)` for every face (see [`face_penalty`]), in parallel. `vertices` and `faces` are
+/// checked by the caller.
 pub(crate) fn conflict_counts<C>(
     vertices: &[[f32; 3]],
     faces: &[[u32; 3]],
     k: usize,
     conflict: C,
-) -> Vec<f32>
+) -> Result<Vec<f32>>
 where
     C: Fn(&[[f32; 3]; 3], &[[f32; 3]; 3]) -> usize + Sync,
 {
+    let k = k.min(faces.len().saturating_sub(1));
+    if k == 0 {
+        return Ok(vec![0.0; faces.len()]);
+    }
     let tris: Vec<[[f32; 3]; 3]> = faces.iter().map(|f| corners(vertices, f)).collect();
-    let centres: Vec<[f32; 3]> = tris
-        .iter()
-        .map(|t| {
-            std::array::from_fn(|c| {
-                ((f64::from(t[0][c]) + f64::from(t[1][c]) + f64::from(t[2][c])) / 3.0) as f32
-            })
-        })
-        .collect();
-    let tree = PointIndex::new(&centres);
-    tris.par_iter()
-        .zip(centres.par_iter())
-        .enumerate()
-        .map(|(i, (t, c))| {
-            tree.nearest_k(c, k + 1)
-                .into_iter()
-                .filter(|(j, _)| *j != i)
-                .take(k)
-                .filter_map(|(j, _)| tris.get(j))
+    let nearby = triangle_knn_graph(vertices, faces, k)?;
+    Ok(tris
+        .par_iter()
+        .zip(nearby.indices.par_chunks(k))
+        .map(|(t, row)| {
+            row.iter()
+                .filter_map(|&j| tris.get(j as usize))
                 .map(|u| conflict(t, u))
                 .sum::<usize>() as f32
         })
-        .collect()
+        .collect())
 }

@@ -18,9 +18,8 @@
 use crate::Error;
 use crate::Result;
 use crate::losses::tensor_points::{index_tensor, points_of};
-use crate::point_index::PointIndex;
 use candle_core::{DType, Tensor};
-use meshgnn_geometry::symmetric_eigen3;
+use meshgnn_geometry::{curvature_neighbourhoods, symmetric_eigen3};
 use rayon::prelude::*;
 
 /// Squared lengths below this count as a point sitting on all its neighbours (κ = 0 there, as
@@ -58,7 +57,7 @@ pub fn mean_curvature(points: &Tensor, k: usize) -> Result<Tensor> {
         });
     }
     let k = k.min(m - 1);
-    let neighbours = neighbours_excluding_self(&pts, k);
+    let neighbours = neighbours_excluding_self(&pts, k)?;
     let idx = index_tensor(neighbours, points.device())?;
     // d_ij = p_j − p_i: (M, k, 3)
     let offsets = points
@@ -78,26 +77,10 @@ pub fn mean_curvature(points: &Tensor, k: usize) -> Result<Tensor> {
     Ok(weights.mul(&kappa_j)?.sum(1)?.div(&weights.sum(1)?)?)
 }
 
-/// The `k` nearest other points of every point, flattened `#P·k`: the `k + 1` nearest with the
-/// point itself dropped (or, when a duplicate pushed it out, the farthest).
-fn neighbours_excluding_self(points: &[[f32; 3]], k: usize) -> Vec<u32> {
-    let tree = PointIndex::new(points);
-    points
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, p)| {
-            let found = tree.nearest_k(p, k + 1);
-            let skip = found
-                .iter()
-                .position(|n| n.0 == i)
-                .unwrap_or(found.len().saturating_sub(1));
-            found
-                .into_iter()
-                .enumerate()
-                .filter(move |(position, _)| *position != skip)
-                .map(|(_, (j, _))| j as u32)
-        })
-        .collect()
+/// The `k` nearest other points of every point, flattened `#P·k`: the very neighbourhoods of
+/// `meshgnn_geometry::curvature_features` (one function serves both).
+fn neighbours_excluding_self(points: &[[f32; 3]], k: usize) -> Result<Vec<u32>> {
+    Ok(curvature_neighbourhoods(points, k)?.indices)
 }
 
 /// Unit eigenvectors of the smallest eigenvalue of every `Σ_j d_ij d_ijᵀ`, `(M, 3)` in `f64`,
@@ -146,6 +129,47 @@ mod tests {
         assert!(worst < 1e-5, "largest difference {worst}");
         // the cube's edges and corners are curved, its faces flat
         assert!(want.iter().any(|&x| x > 0.05) && want.iter().any(|&x| x < 1e-4));
+    }
+
+    #[test]
+    fn loss_and_metric_share_neighbourhoods_on_a_cloud_with_duplicates_and_ties() {
+        // A 6×6 grid (many equal distances), each node twice, plus jittered points, some of
+        // them repeated three times.
+        let mut rng = StdRng::seed_from_u64(11);
+        let mut pts: Vec<[f32; 3]> = (0..72)
+            .map(|i| [((i / 2) % 6) as f32, ((i / 2) / 6) as f32, 0.0])
+            .collect();
+        for _ in 0..60 {
+            let p = [
+                rng.random_range(0.0..5.0f32),
+                rng.random_range(0.0..5.0f32),
+                rng.random_range(0.2..1.0f32),
+            ];
+            let copies = if rng.random_bool(0.3) { 3 } else { 1 };
+            pts.extend(std::iter::repeat_n(p, copies));
+        }
+        let k = 8;
+        let loss_hoods = neighbours_excluding_self(&pts, k).unwrap();
+        let metric_hoods = curvature_neighbourhoods(&pts, k).unwrap();
+        assert_eq!(loss_hoods, metric_hoods.indices);
+        // Ties were resolved by index, as a brute-force sort of (distance, index) says.
+        for (i, p) in pts.iter().enumerate() {
+            let mut all: Vec<(f32, u32)> = (0..pts.len())
+                .filter(|&j| j != i)
+                .map(|j| (meshgnn_geometry::squared_distance(&pts[j], p), j as u32))
+                .collect();
+            all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let want: Vec<u32> = all.iter().take(k).map(|x| x.1).collect();
+            assert_eq!(metric_hoods.row(i), want.as_slice(), "point {i}");
+        }
+        let want = curvature_features(&pts, k).unwrap().mean_curvature;
+        let t = Tensor::from_slice(pts.as_flattened(), (pts.len(), 3), &Device::Cpu).unwrap();
+        let got = mean_curvature(&t, k).unwrap().to_vec1::<f32>().unwrap();
+        let worst = got
+            .iter()
+            .zip(&want)
+            .fold(0.0f32, |w, (a, b)| w.max((a - b).abs()));
+        assert!(worst < 1e-5, "largest difference {worst}");
     }
 
     #[test]

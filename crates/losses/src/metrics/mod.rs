@@ -1,4 +1,4 @@
-//! Evaluation metrics as plain Rust (f64 accumulation, rayon, kiddo nearest neighbours).
+//! Evaluation metrics as plain Rust (f64 accumulation, rayon, `SpatialIndex` nearest neighbours).
 
 mod chamfer;
 mod curvature_error;

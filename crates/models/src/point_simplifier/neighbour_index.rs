@@ -12,7 +12,8 @@
 use std::sync::Arc;
 
 use candle_core::{Device, Tensor};
-use meshgnn_graph::{CsrMatrix, KnnIndex, Neighbours};
+use meshgnn_geometry::SpatialIndex;
+use meshgnn_graph::{CsrMatrix, Neighbours};
 use rayon::prelude::*;
 
 use crate::{Error, Result};
@@ -27,7 +28,7 @@ pub struct NeighbourIndex {
     width: usize,
     /// The kd-tree the k-NN rows came from, when built by [`NeighbourIndex::from_knn_index`]:
     /// reused for AttRef's eq. 5.5 queries over the same points.
-    knn_index: Option<Arc<KnnIndex>>,
+    knn_index: Option<Arc<SpatialIndex>>,
 }
 
 impl NeighbourIndex {
@@ -101,23 +102,23 @@ impl NeighbourIndex {
     ///
     /// ```
     /// use candle_core::Device;
-    /// use meshgnn_graph::KnnIndex;
+    /// use meshgnn_geometry::SpatialIndex;
     /// use meshgnn_models::point_simplifier::NeighbourIndex;
     /// let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
-    /// let g = NeighbourIndex::from_knn_index(KnnIndex::new(&pts)?, 1, &Device::Cpu)?;
+    /// let g = NeighbourIndex::from_knn_index(SpatialIndex::new(&pts)?, 1, &Device::Cpu)?;
     /// let idx: Vec<u32> = g.indices().to_vec1()?;
     /// assert_eq!(idx, vec![1, 0, 1]);
-    /// assert_eq!(g.knn_index().map(KnnIndex::len), Some(3));
+    /// assert_eq!(g.knn_index().map(SpatialIndex::len), Some(3));
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
-    pub fn from_knn_index(index: KnnIndex, k: usize, device: &Device) -> Result<Self> {
-        let mut graph = Self::from_knn(&index.graph(k)?, device)?;
+    pub fn from_knn_index(index: SpatialIndex, k: usize, device: &Device) -> Result<Self> {
+        let mut graph = Self::from_knn(&index.knn_graph(k)?, device)?;
         graph.knn_index = Some(Arc::new(index));
         Ok(graph)
     }
 
     /// The k-NN index kept by [`NeighbourIndex::from_knn_index`] (`None` otherwise).
-    pub fn knn_index(&self) -> Option<&KnnIndex> {
+    pub fn knn_index(&self) -> Option<&SpatialIndex> {
         self.knn_index.as_deref()
     }
 

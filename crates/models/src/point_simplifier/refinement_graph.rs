@@ -14,7 +14,7 @@
 //!   of learnable layers.
 
 use candle_core::{Device, Tensor};
-use meshgnn_graph::KnnIndex;
+use meshgnn_geometry::SpatialIndex;
 use rayon::prelude::*;
 
 use crate::{Error, Result};
@@ -54,7 +54,7 @@ pub fn refinement_graph(
     k: usize,
     device: &Device,
 ) -> Result<RefinementGraph> {
-    refinement_graph_indexed(&KnnIndex::new(points)?, points, centres, k, device)
+    refinement_graph_indexed(&SpatialIndex::new(points)?, points, centres, k, device)
 }
 
 /// [`refinement_graph`] with a prebuilt `index` over the same `points: #N×3` (e.g. the one
@@ -63,16 +63,16 @@ pub fn refinement_graph(
 ///
 /// ```
 /// use candle_core::Device;
-/// use meshgnn_graph::KnnIndex;
+/// use meshgnn_geometry::SpatialIndex;
 /// use meshgnn_models::point_simplifier::refinement_graph_indexed;
 /// let pts = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [9.0, 9.0, 9.0]];
-/// let g = refinement_graph_indexed(&KnnIndex::new(&pts)?, &pts, &[3], 2, &Device::Cpu)?;
+/// let g = refinement_graph_indexed(&SpatialIndex::new(&pts)?, &pts, &[3], 2, &Device::Cpu)?;
 /// let nb: Vec<u32> = g.neighbours.to_vec1()?;
 /// assert_eq!(nb, vec![3, 1]); // itself, then the nearest (|(7, 9, 9)|² < |(9, 7, 9)|²)
 /// # Ok::<(), meshgnn_models::Error>(())
 /// ```
 pub fn refinement_graph_indexed(
-    index: &KnnIndex,
+    index: &SpatialIndex,
     points: &[[f32; 3]],
     centres: &[u32],
     k: usize,
@@ -97,7 +97,7 @@ pub fn refinement_graph_indexed(
         .iter()
         .filter_map(|&c| points.get(c as usize).copied())
         .collect();
-    let nn = index.query(&centre_points, k)?;
+    let nn = index.knn(&centre_points, k)?;
     let mut offsets = vec![0f32; m * k * 3];
     let mut scales = vec![0f32; m];
     offsets
@@ -161,7 +161,7 @@ mod tests {
             })
             .collect();
         let centres = [0, 17, 42, 299];
-        let index = KnnIndex::new(&pts).unwrap();
+        let index = SpatialIndex::new(&pts).unwrap();
         let a = refinement_graph(&pts, &centres, 15, &Device::Cpu).unwrap();
         let b = refinement_graph_indexed(&index, &pts, &centres, 15, &Device::Cpu).unwrap();
         let nb = |g: &RefinementGraph| g.neighbours.to_vec1::<u32>().unwrap();
@@ -171,7 +171,7 @@ mod tests {
         assert_eq!(off(&a), off(&b));
         assert_eq!(sc(&a), sc(&b));
         assert_eq!(nb(&a)[0], 0);
-        let other = KnnIndex::new(&pts[..200]).unwrap();
+        let other = SpatialIndex::new(&pts[..200]).unwrap();
         assert!(refinement_graph_indexed(&other, &pts, &centres, 15, &Device::Cpu).is_err());
     }
 }

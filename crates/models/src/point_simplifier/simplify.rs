@@ -5,7 +5,8 @@
 use std::time::{Duration, Instant};
 
 use meshgnn_geometry::unit_sphere_normalization;
-use meshgnn_graph::{CsrMatrix, KnnIndex};
+use meshgnn_geometry::SpatialIndex;
+use meshgnn_graph::CsrMatrix;
 
 use super::latent_sampling::spatial_order;
 use super::{LatentSamplingOptions, NeighbourIndex, PointSimplifier, StageTimings};
@@ -113,7 +114,7 @@ impl PointSimplifier {
             None if n == 1 => NeighbourIndex::from_rows(&[Vec::new()], self.device())?,
             None => {
                 let k = self.config().gnn_neighbours.min(n - 1);
-                NeighbourIndex::from_knn_index(KnnIndex::new(&unit)?, k, self.device())?
+                NeighbourIndex::from_knn_index(SpatialIndex::new(&unit)?, k, self.device())?
             }
         };
         let knn = t_knn.elapsed();
