@@ -355,9 +355,9 @@ proptest! {
     ) {
         let json = gltf_document(uri, byte_length, instances);
         let (mut bytes, name) = if as_glb {
-            (glb_container(&json), "m.glb")
+            (glb_container(&json), "proptest.glb")
         } else {
-            (json.into_bytes(), "m.gltf")
+            (json.into_bytes(), "proptest.gltf")
         };
         mutate(&mut bytes, &mutations);
         read_in_folder(&bytes, name);
@@ -368,14 +368,15 @@ proptest! {
 fn only_the_uris_inside_the_folder_load() {
     for uri in URIS {
         let json = gltf_document(uri, 44, 1);
-        let path = folder().join("m.gltf");
+        // File names distinct from the proptest's: tests share the folder and run in parallel.
+        let path = folder().join("uris.gltf");
         std::fs::write(&path, &json).unwrap();
         let inside = matches!(
             uri,
             "tri.bin" | "sub/tri.bin" | "sub/../tri.bin" | "%74ri.bin" | "up/inner/tri.bin"
         );
         assert_eq!(read_mesh(&path).is_ok(), inside, "{uri}");
-        read_in_folder(&glb_container(&json), "m.glb");
+        read_in_folder(&glb_container(&json), "uris.glb");
     }
 }
 
