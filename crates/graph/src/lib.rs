@@ -11,24 +11,16 @@ mod closest_point_on_triangle;
 mod error;
 mod mesh_hierarchy;
 mod pooling_matrices;
-mod qem_candidates;
-mod qem_collapse_checks;
-mod qem_collapser;
-mod qem_decimation;
-mod qem_edge_placement;
-mod qem_memory_warmup;
-mod qem_speculation;
-mod qem_vertex_bits;
-mod qem_vertices;
-mod quadric;
-mod weld_by_position;
+mod qem;
 
 mod candidate_triangles;
 mod csr_matrix;
 mod farthest_point_sampling;
 mod fast_farthest_point_sampling;
 mod k_ring;
+mod kd_tree;
 mod knn_graph;
+mod knn_index;
 mod mesh_adjacency;
 mod radius_graph;
 mod spiral;
@@ -39,10 +31,10 @@ mod weighted_sampling;
 pub use error::{Error, Result};
 pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
 pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};
-pub use qem_decimation::{
-    Decimation, DecimationOptions, StopReason, Target, decimate, decimate_with_progress,
+pub use qem::{
+    Decimation, DecimationOptions, QemVertices, Quadric, StopReason, Target, decimate,
+    decimate_with_progress, qem_vertices,
 };
-pub use quadric::Quadric;
 
 pub use candidate_triangles::candidate_triangles;
 pub use csr_matrix::CsrMatrix;
@@ -54,8 +46,8 @@ pub use fast_farthest_point_sampling::{
 };
 pub use k_ring::{k_disk, k_rings};
 pub use knn_graph::{Neighbours, knn_graph, knn_query};
+pub use knn_index::KnnIndex;
 pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};
-pub use qem_vertices::{QemVertices, qem_vertices};
 pub use radius_graph::{RadiusNeighbours, radius_graph};
 pub use spiral::{Spirals, spiral_sequences};
 pub use top_curvature_sampling::top_curvature_sampling;

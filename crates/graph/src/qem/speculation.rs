@@ -9,10 +9,10 @@
 
 use rayon::prelude::*;
 
-use crate::qem_candidates::Candidate;
-use crate::qem_collapse_checks::CheckScratch;
-use crate::qem_collapser::{Collapser, Placement};
-use crate::qem_vertex_bits::VertexBits;
+use super::candidates::Candidate;
+use super::collapse_checks::CheckScratch;
+use super::collapser::{Collapser, Placement};
+use super::vertex_bits::VertexBits;
 
 /// Footprints longer than this are not stored: such a verdict is always re-checked. 22
 /// neighbours (valence up to ~12 at both ends) keep a [`Speculation`] at 128 bytes, two cache
@@ -164,7 +164,7 @@ impl Collapser {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qem_decimation::DecimationOptions;
+    use crate::qem::decimation::DecimationOptions;
     use meshgnn_geometry::{TriMesh, icosphere};
 
     /// An icosphere with deterministic radial noise (so some collapses are rejected).

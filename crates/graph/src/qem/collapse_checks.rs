@@ -5,7 +5,7 @@
 
 use std::cmp::Ordering;
 
-use crate::qem_collapser::{Collapser, DEAD};
+use super::collapser::{Collapser, DEAD};
 use meshgnn_geometry::vec3::{cross, dot, sub};
 
 /// Normals of faces may turn by at most `acos(0.2)` ≈ 78° in one collapse.

@@ -8,7 +8,7 @@
 //! faster, single-threaded, on 1.3M faces). Safe Rust has no prefetch instruction; a plain
 //! load whose value feeds a `black_box` does the same job.
 
-use crate::qem_collapser::Collapser;
+use super::collapser::Collapser;
 
 impl Collapser {
     /// Touches the vertex records and quadrics of `vertices` (what scoring an edge reads).

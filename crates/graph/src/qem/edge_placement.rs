@@ -2,7 +2,7 @@
 //! "optimal placement" by solving `A v = −b`, falling back to the endpoints and the midpoint
 //! when `A` is singular). Thesis ch. 2.3.2.
 
-use crate::qem_collapser::{Collapser, Placement};
+use super::collapser::{Collapser, Placement};
 use meshgnn_geometry::vec3::{dot, sub};
 
 impl Collapser {

@@ -4,8 +4,8 @@
 
 use meshgnn_geometry::{TriMesh, boundary_loops};
 
+use super::decimation::{DecimationOptions, Target, decimate};
 use crate::error::{Error, Result};
-use crate::qem_decimation::{DecimationOptions, Target, decimate};
 
 /// Passes before giving up (each removes at least half of the remaining excess).
 const MAX_PASSES: usize = 64;

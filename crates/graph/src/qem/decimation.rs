@@ -22,10 +22,10 @@
 //!    stale). The next pass keeps the still-valid sorted candidates and merges in the
 //!    re-scored edges around the changed vertices (visited in vertex order, for locality).
 //!    The loop itself is sequential, but the placement and checks of the next batch of
-//!    candidates are evaluated speculatively in parallel (`qem_speculation.rs`) and reused
+//!    candidates are evaluated speculatively in parallel (`speculation.rs`) and reused
 //!    unless an earlier collapse of the batch touched what they read, so the result is that
 //!    of the sequential loop; fans are warmed level by level before they are walked
-//!    (`qem_memory_warmup.rs`). A collapse is rejected when it would break the link
+//!    (`memory_warmup.rs`). A collapse is rejected when it would break the link
 //!    condition (the output would stop being a 2-manifold: pinched vertices, duplicated faces,
 //!    a vanished component), flip a face (its normal turning by more than ~78° in the
 //!    collapse), fold a face away from the input surface it stands for (more than ~78° from
@@ -64,12 +64,12 @@
 use meshgnn_geometry::TriMesh;
 use rayon::prelude::*;
 
+use super::candidates::{Candidate, cost_key, key_cost, merge_sorted, radix_sort};
+use super::collapse_checks::CheckScratch;
+use super::collapser::{Collapser, DEAD};
+use super::speculation::{Speculations, Verdict};
+use super::vertex_bits::VertexBits;
 use crate::error::{Error, Result};
-use crate::qem_candidates::{Candidate, cost_key, key_cost, merge_sorted, radix_sort};
-use crate::qem_collapse_checks::CheckScratch;
-use crate::qem_collapser::{Collapser, DEAD};
-use crate::qem_speculation::{Speculations, Verdict};
-use crate::qem_vertex_bits::VertexBits;
 
 /// How far to simplify.
 #[derive(Debug, Clone, Copy, PartialEq)]

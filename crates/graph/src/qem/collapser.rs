@@ -1,8 +1,8 @@
 //! The mutable state of QEM decimation (Garland & Heckbert, SIGGRAPH 1997; thesis ch. 2.3.2):
 //! compact vertex records, per-vertex quadrics, the faces and a flat vertex → face incidence
 //! list, and the edge collapse that updates them. The placement of a collapse lives in
-//! `qem_edge_placement.rs`, its validity checks in `qem_collapse_checks.rs`, the passes in
-//! `qem_decimation.rs`.
+//! `edge_placement.rs`, its validity checks in `collapse_checks.rs`, the passes in
+//! `decimation.rs`.
 //!
 //! # Layout
 //! Everything the collapse loop reads for a vertex (position, region normal, where its
@@ -14,10 +14,10 @@ use meshgnn_geometry::TriMesh;
 use meshgnn_geometry::vec3::{cross, dot, sub};
 use rayon::prelude::*;
 
+use super::decimation::{Decimation, DecimationOptions, StopReason};
+use super::quadric::Quadric;
+use super::weld_by_position::weld_by_position;
 use crate::error::{Error, Result};
-use crate::qem_decimation::{Decimation, DecimationOptions, StopReason};
-use crate::quadric::Quadric;
-use crate::weld_by_position::weld_by_position;
 
 /// Marks a dead face (`faces[f] = [DEAD; 3]`).
 pub(crate) const DEAD: u32 = u32::MAX;

@@ -1,0 +1,24 @@
+//! QEM edge-collapse decimation (Garland & Heckbert 1997) and what is built on it: the
+//! decimation itself ([`decimate`], algorithm and guarantees in `decimation.rs`), the plane
+//! quadrics it sums ([`Quadric`]) and QEM vertex selection for point clouds on a mesh
+//! ([`qem_vertices`], thesis ch. 5.5). The other files are the decimation's parts: welding,
+//! vertex records and collapses, edge placement, validity checks, candidate sorting,
+//! speculative parallel checks, memory warm-up and the changed-vertex sets.
+
+mod candidates;
+mod collapse_checks;
+mod collapser;
+mod decimation;
+mod edge_placement;
+mod memory_warmup;
+mod quadric;
+mod speculation;
+mod vertex_bits;
+mod vertex_selection;
+mod weld_by_position;
+
+pub use decimation::{
+    Decimation, DecimationOptions, StopReason, Target, decimate, decimate_with_progress,
+};
+pub use quadric::Quadric;
+pub use vertex_selection::{QemVertices, qem_vertices};
