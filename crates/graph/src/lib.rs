@@ -18,9 +18,7 @@ mod csr_matrix;
 mod farthest_point_sampling;
 mod fast_farthest_point_sampling;
 mod k_ring;
-mod kd_tree;
 mod knn_graph;
-mod knn_index;
 mod mesh_adjacency;
 mod radius_graph;
 mod spiral;
@@ -46,7 +44,6 @@ pub use fast_farthest_point_sampling::{
 };
 pub use k_ring::{k_disk, k_rings};
 pub use knn_graph::{Neighbours, knn_graph, knn_query};
-pub use knn_index::KnnIndex;
 pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};
 pub use radius_graph::{RadiusNeighbours, radius_graph};
 pub use spiral::{Spirals, spiral_sequences};
