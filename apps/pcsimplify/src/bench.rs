@@ -8,10 +8,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use meshgnn_geometry::{MeshFormat, OutputGuard, atomic_write, unit_sphere_normalization};
+use meshgnn_data::gaussian_noise;
+use meshgnn_geometry::{MeshFormat, OutputGuard, atomic_write};
 use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
-use rand::{SeedableRng, rngs::StdRng};
-use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -157,18 +156,6 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_else(|| path.display().to_string())
 }
 
-/// Seeded Gaussian noise of standard deviation `sigma × radius` (bounding sphere about the
-/// centroid) on every coordinate of `points: #P×3`.
-fn add_noise(points: &[[f32; 3]], sigma: f64, seed: u64) -> Result<Vec<[f32; 3]>> {
-    let radius = unit_sphere_normalization(points)?.radius;
-    let normal = Normal::new(0.0, sigma * radius).context("noise σ")?;
-    let mut rng = StdRng::seed_from_u64(seed);
-    Ok(points
-        .iter()
-        .map(|p| p.map(|x| (f64::from(x) + normal.sample(&mut rng)) as f32))
-        .collect())
-}
-
 /// Every method at every ratio on file `index`.
 fn bench_file(
     args: &BenchArgs,
@@ -179,7 +166,7 @@ fn bench_file(
     let name = file_name(path);
     let clean = read_input(path)?;
     let input: Input = if args.noise > 0.0 {
-        let noisy = add_noise(
+        let noisy = gaussian_noise(
             &clean.points,
             args.noise,
             args.seed.wrapping_add(index as u64),
@@ -383,7 +370,7 @@ mod tests {
     fn noise_has_the_requested_sigma_and_is_seeded() {
         let sphere = icosphere(5); // 10242 points, bounding-sphere radius 1
         let points = sphere.vertices();
-        let noisy = add_noise(points, 0.01, 3).unwrap();
+        let noisy = gaussian_noise(points, 0.01, 3).unwrap();
         let n = (points.len() * 3) as f64;
         let var: f64 = points
             .iter()
@@ -392,7 +379,7 @@ mod tests {
             .sum::<f64>()
             / n;
         assert!((var.sqrt() - 0.01).abs() < 0.0005, "σ = {}", var.sqrt());
-        assert_eq!(noisy, add_noise(points, 0.01, 3).unwrap());
-        assert_ne!(noisy, add_noise(points, 0.01, 4).unwrap());
+        assert_eq!(noisy, gaussian_noise(points, 0.01, 3).unwrap());
+        assert_ne!(noisy, gaussian_noise(points, 0.01, 4).unwrap());
     }
 }

@@ -1,14 +1,15 @@
 //! PCA compactness of the hand set with and without articulation:
 //! `cargo run -p meshgnn-data --release --example hand_pca -- [subjects] [subdivisions]`.
 
-use meshgnn_data::{HandSetConfig, HandTemplate, components_for_variance, pca_explained_variance};
+use meshgnn_data::{HandSetConfig, HandTemplate};
+use meshgnn_losses::metrics::{Compactness, compactness};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let n: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(200);
     let level: u32 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(3);
     let template = HandTemplate::new(level)?;
-    let curve = |articulated| -> Result<Vec<f64>, meshgnn_data::Error> {
+    let curve = |articulated| -> Result<Compactness, Box<dyn std::error::Error>> {
         let cfg = HandSetConfig {
             subdivisions: level,
             articulated,
@@ -18,13 +19,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let shapes = (0..n)
             .map(|i| cfg.sample(&template, i).map(|s| s.vertices))
             .collect::<Result<Vec<_>, _>>()?;
-        pca_explained_variance(&shapes)
+        Ok(compactness(&shapes)?)
     };
     let (posed, still) = (curve(true)?, curve(false)?);
     println!("| components | posed | pose-free |");
     println!("|---:|---:|---:|");
     for k in [1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50] {
-        if let (Some(a), Some(b)) = (posed.get(k - 1), still.get(k - 1)) {
+        if let (Some(a), Some(b)) = (posed.cumulative.get(k - 1), still.cumulative.get(k - 1)) {
             println!("| {k} | {:.3} | {:.3} |", a, b);
         }
     }
@@ -32,8 +33,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "components for {:.0} %: posed {}, pose-free {}",
             f * 100.0,
-            components_for_variance(&posed, f),
-            components_for_variance(&still, f)
+            posed.components_for(f),
+            still.components_for(f)
         );
     }
     Ok(())

@@ -1,11 +1,9 @@
 //! Invariants of the synthetic hand set: shared topology, manifold with a single wrist
 //! boundary, no self-intersections, determinism, and non-linearity of articulation (PCA).
 
-use meshgnn_data::{
-    HandPose, HandSetConfig, HandTemplate, components_for_variance, pca_explained_variance,
-    self_intersections,
-};
+use meshgnn_data::{HandPose, HandSetConfig, HandTemplate, self_intersections};
 use meshgnn_geometry::{TriMesh, boundary_loops, mesh_report};
+use meshgnn_losses::metrics::compactness;
 
 fn cfg(level: u32, articulated: bool) -> HandSetConfig {
     HandSetConfig {
@@ -107,12 +105,9 @@ fn articulation_makes_the_shape_space_non_linear() {
             .map(|i| cfg(1, articulated).sample(&t, i).unwrap().vertices)
             .collect()
     };
-    let posed = pca_explained_variance(&set(true)).unwrap();
-    let still = pca_explained_variance(&set(false)).unwrap();
-    let (np, ns) = (
-        components_for_variance(&posed, 0.95),
-        components_for_variance(&still, 0.95),
-    );
+    let posed = compactness(&set(true)).unwrap();
+    let still = compactness(&set(false)).unwrap();
+    let (np, ns) = (posed.components_for(0.95), still.components_for(0.95));
     eprintln!("components for 95 %: posed {np}, pose-free {ns}");
     assert!(np >= 2 * ns, "posed {np} vs pose-free {ns}");
 }

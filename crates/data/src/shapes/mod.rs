@@ -10,5 +10,5 @@ mod shape_family;
 
 pub use lidar_scene::{LidarConfig, lidar_scene};
 pub use marching_tetrahedra::marching_tetrahedra;
-pub use noisy_scan::noisy_scan;
+pub use noisy_scan::{gaussian_noise, noisy_scan};
 pub use shape_family::{ShapeFamily, shape_mesh};

@@ -38,6 +38,23 @@ pub struct Compactness {
     pub cumulative: Vec<f64>,
 }
 
+impl Compactness {
+    /// How many components reach `fraction` (0-1) of the variance: the first `c` with
+    /// `cumulative[c − 1] >= fraction`, or all of them when none does.
+    ///
+    /// ```
+    /// use meshgnn_losses::metrics::Compactness;
+    /// let c = Compactness { variances: vec![5.0, 4.0, 0.7, 0.3], cumulative: vec![0.5, 0.9, 0.97, 1.0] };
+    /// assert_eq!((c.components_for(0.95), c.components_for(0.5), c.components_for(1.1)), (3, 1, 4));
+    /// ```
+    pub fn components_for(&self, fraction: f64) -> usize {
+        self.cumulative
+            .iter()
+            .position(|&c| c >= fraction)
+            .map_or(self.cumulative.len(), |i| i + 1)
+    }
+}
+
 /// Checks a collection of registered shapes: non-empty, same vertex count, finite.
 fn check_shapes(what: &'static str, shapes: &[Vec<[f32; 3]>]) -> Result<usize> {
     let first = shapes.first().ok_or(Error::Empty { what })?;
