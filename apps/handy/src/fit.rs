@@ -5,8 +5,10 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use meshgnn_geometry::{OutputGuard, TriMesh, read_point_cloud, write_mesh};
-use meshgnn_models::{ChamferDirection, MorphableModel, ScanFitOptions, fit_scan};
+use meshgnn_geometry::{
+    OutputGuard, TriMesh, check_count, check_input_points, read_point_cloud, write_mesh,
+};
+use meshgnn_models::{ChamferDirection, MAX_FIT_STEPS, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;
 
 use crate::model::load_model;
@@ -46,9 +48,16 @@ pub struct FitArgs {
 
 pub fn run(args: &FitArgs) -> Result<()> {
     OutputGuard::new(std::iter::once(&args.scan).chain(&args.model)).check(&args.output)?;
+    check_count(
+        "--steps",
+        args.steps,
+        1..=MAX_FIT_STEPS,
+        "Adam steps of the fit",
+    )?;
     let loaded = load_model(args.model.as_deref())?;
-    let scan =
-        read_point_cloud(&args.scan).with_context(|| format!("reading {}", args.scan.display()))?;
+    let scan = read_point_cloud(&args.scan)
+        .and_then(|scan| check_input_points(&args.scan, scan.points()).map(|()| scan))
+        .with_context(|| format!("reading {}", args.scan.display()))?;
     let options = ScanFitOptions {
         steps: args.steps,
         direction: if args.symmetric {

@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
-use meshgnn_geometry::OutputGuard;
-use meshgnn_models::{MorphableModel, decode_latents};
+use meshgnn_geometry::{OutputGuard, check_count};
+use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, decode_latents};
 use serde_json::json;
 
 use crate::model::load_model;
@@ -16,7 +16,7 @@ use crate::shape_folder::{ShapeFolder, write_shape_folder};
 /// Arguments of `handy sample`.
 #[derive(Args, Debug)]
 pub struct SampleArgs {
-    /// Number of hands.
+    /// Number of hands (1 to 1000).
     #[arg(short = 'n', long, default_value_t = 10)]
     pub count: usize,
     /// Output folder (created): `sample_000.obj`, …, `samples.png`.
@@ -34,9 +34,12 @@ pub struct SampleArgs {
 }
 
 pub fn run(args: &SampleArgs) -> Result<()> {
-    if args.count == 0 {
-        bail!("--count must be at least 1");
-    }
+    check_count(
+        "--count",
+        args.count,
+        1..=MAX_DECODED_SHAPES,
+        "every hand is a decoded mesh and a contact-sheet tile",
+    )?;
     let loaded = load_model(args.model.as_deref())?;
     let latents = loaded.gaussian.sample(args.count, args.seed);
     let shapes = decode_latents(&loaded.model, &latents)?;

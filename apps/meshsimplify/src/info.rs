@@ -8,8 +8,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use meshgnn_geometry::{MeshFormat, MeshReport, mesh_report, read_mesh};
+use anyhow::{Context, Result, bail};
+use meshgnn_geometry::{
+    InputUse, MeshFormat, MeshReport, check_input_mesh, mesh_report, read_mesh,
+};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -23,18 +25,41 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
-/// Reports on one file, or on every mesh file of a folder in parallel.
+/// Reports on one file, or on every mesh file of a folder in parallel. In a folder, a file
+/// that cannot be read or holds no vertices is reported on stderr and the others still are;
+/// the command then fails, naming how many files failed.
 pub fn run(args: &InfoArgs) -> Result<()> {
     if args.path.is_dir() {
         let files = mesh_files(&args.path)?;
-        let reports: Vec<Value> = files
-            .par_iter()
-            .map(|file| inspect(file))
-            .collect::<Result<_>>()?;
+        if files.is_empty() {
+            bail!(
+                "{} holds no mesh file (.obj .ply .off .gltf .glb .xyz)",
+                args.path.display()
+            );
+        }
+        let results: Vec<Result<Value>> = files.par_iter().map(|file| inspect(file)).collect();
+        let mut reports = Vec::with_capacity(results.len());
+        let mut failed = 0;
+        for result in results {
+            match result {
+                Ok(report) => reports.push(report),
+                Err(error) => {
+                    eprintln!("meshsimplify: {error:#}");
+                    failed += 1;
+                }
+            }
+        }
         if args.json {
             println!("{}", Value::Array(reports));
         } else {
             reports.iter().for_each(print_text);
+        }
+        if failed > 0 {
+            bail!(
+                "{failed} of {} mesh files in {} could not be reported (listed above)",
+                files.len(),
+                args.path.display()
+            );
         }
     } else {
         let report = inspect(&args.path)?;
@@ -52,6 +77,7 @@ fn inspect(file: &Path) -> Result<Value> {
     let start = Instant::now();
     let mesh = read_mesh(file)?;
     let load_seconds = start.elapsed().as_secs_f64();
+    check_input_mesh(file, &mesh, InputUse::Points)?;
     let report = mesh_report(&mesh);
     Ok(to_json(file, &report, load_seconds))
 }

@@ -15,7 +15,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use meshgnn_geometry::{MeshFormat, OutputGuard, read_mesh, write_mesh};
+use meshgnn_geometry::{
+    InputUse, MeshFormat, OutputGuard, check_input_mesh, read_mesh, write_mesh,
+};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
 use serde_json::json;
 
@@ -78,6 +80,9 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         .overridable_by("--force")
         .check(&args.output)?;
     let mesh = read_mesh(&args.input)?;
+    check_input_mesh(&args.input, &mesh, InputUse::Surface)?;
+    check_target(&target, mesh.face_count())
+        .with_context(|| format!("simplifying {}", args.input.display()))?;
 
     let options = DecimationOptions {
         target,
@@ -133,4 +138,20 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Fails unless `target` keeps between 1 and all of the input's `faces`.
+fn check_target(target: &Target, faces: usize) -> Result<()> {
+    match *target {
+        Target::Faces(0) => bail!("--faces 0: keep at least 1 face"),
+        Target::Faces(n) if n > faces => bail!(
+            "--faces {n} is more than the input's {faces} faces: choose at most {faces} \
+             (or copy the file)"
+        ),
+        Target::Ratio(r) if (r * faces as f64).round() < 1.0 => bail!(
+            "--ratio {r} keeps 0 of the input's {faces} faces: raise it to at least {:.3e}",
+            1.0 / faces as f64
+        ),
+        _ => Ok(()),
+    }
 }

@@ -11,9 +11,10 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use meshgnn_geometry::read_point_cloud;
+use meshgnn_geometry::{check_count, check_input_points, read_point_cloud};
 use meshgnn_losses::metrics::{
-    EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation, point_cloud_evaluation,
+    EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation,
+    point_cloud_evaluation,
 };
 use serde_json::json;
 
@@ -27,19 +28,35 @@ pub struct EvalArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Neighbours for the curvature features (eq. 5.1-5.3).
+    /// Neighbours for the curvature features (eq. 5.1-5.3), 2 to 256.
     #[arg(long, default_value_t = EVALUATION_CURVATURE_NEIGHBOURS)]
     pub k: usize,
 }
 
 /// Loads both clouds, evaluates, prints text or JSON.
 pub fn run(args: &EvalArgs) -> Result<()> {
-    let original = read_point_cloud(&args.original)
-        .with_context(|| format!("reading the original cloud {}", args.original.display()))?;
-    let simplified = read_point_cloud(&args.simplified)
-        .with_context(|| format!("reading the simplified cloud {}", args.simplified.display()))?;
-    let e = point_cloud_evaluation(original.points(), simplified.points(), args.k)
-        .context("evaluating the simplified cloud")?;
+    check_count(
+        "--k",
+        args.k,
+        2..=MAX_EVALUATION_CURVATURE_NEIGHBOURS,
+        "curvature neighbours per point",
+    )?;
+    let read = |path: &PathBuf, role: &str| {
+        read_point_cloud(path)
+            .and_then(|cloud| check_input_points(path, cloud.points()).map(|()| cloud))
+            .with_context(|| format!("reading the {role} cloud"))
+    };
+    let original = read(&args.original, "original")?;
+    let simplified = read(&args.simplified, "simplified")?;
+    let e = point_cloud_evaluation(original.points(), simplified.points(), args.k).with_context(
+        || {
+            format!(
+                "evaluating {} against the original {}",
+                args.simplified.display(),
+                args.original.display()
+            )
+        },
+    )?;
     if args.json {
         println!("{}", to_json(&e));
     } else {

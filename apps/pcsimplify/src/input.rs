@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
-use meshgnn_geometry::{PointCloud, TriMesh, read_mesh, read_point_cloud};
+use anyhow::{Context, Result};
+use meshgnn_geometry::{PointCloud, TriMesh, check_input_points, read_mesh, read_point_cloud};
 
 /// A cloud to simplify: `points: #P×3`, optional `normals: #P×3`, and the mesh it came from
 /// when the file had faces.
@@ -60,8 +60,6 @@ pub fn read_input(path: &Path) -> Result<Input> {
             read_point_cloud(path).with_context(|| format!("reading {}", path.display()))?,
         ),
     };
-    if input.points.is_empty() {
-        bail!("{} holds no points", path.display());
-    }
+    check_input_points(path, &input.points)?;
     Ok(input)
 }

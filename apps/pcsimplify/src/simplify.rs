@@ -67,7 +67,8 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     let input = read_input(&args.input)?;
     let read_seconds = start.elapsed().as_secs_f64();
     let n = input.points.len();
-    let count = target_count(n, args.ratio, args.points)?;
+    let count = target_count(n, args.ratio, args.points)
+        .with_context(|| format!("simplifying {}", args.input.display()))?;
     let model = match args.method {
         Method::Neural => Some(load_model(args.weights.as_deref())?),
         _ => None,
@@ -89,7 +90,8 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     });
     if args.triangulate {
         let t = Instant::now();
-        let mesh = triangulate(&selection, &kept)?;
+        let mesh = triangulate(&selection, &kept)
+            .with_context(|| format!("simplifying {}", args.input.display()))?;
         let triangulate_seconds = t.elapsed().as_secs_f64();
         let r = mesh_report(&mesh);
         write_mesh(&args.output, &mesh)

@@ -12,6 +12,7 @@ use std::path::Path;
 use meshgnn_geometry::{TriMesh, vertex_normals};
 use rayon::prelude::*;
 
+use crate::count_bounds::MAX_PREVIEW_PIXELS;
 use crate::error::{Error, Result, invalid};
 use crate::vec3::{M3, V3, axis_angle, dot, mul_m, mul_v, normalize, to_f64};
 use meshgnn_geometry::atomic_write;
@@ -186,6 +187,17 @@ pub fn contact_sheet(meshes: &[TriMesh], columns: u32, tile: u32, view: View) ->
     }
     let columns = columns.min(meshes.len() as u32);
     let rows = (meshes.len() as u32).div_ceil(columns);
+    let pixels = u64::from(columns) * u64::from(rows) * u64::from(tile) * u64::from(tile);
+    if pixels > MAX_PREVIEW_PIXELS as u64 {
+        return Err(invalid(
+            "meshes",
+            meshes.len(),
+            &format!(
+                "a {columns}×{rows} sheet of {tile}-pixel tiles is {pixels} pixels, above the \
+                 {MAX_PREVIEW_PIXELS} of MAX_PREVIEW_PIXELS: preview fewer meshes"
+            ),
+        ));
+    }
     let tints = [
         [0.95, 0.80, 0.68],
         [0.75, 0.85, 0.95],

@@ -23,6 +23,7 @@ pub mod vec3;
 mod boundary_loops;
 mod connected_components;
 mod cotangent_laplacian;
+mod count_bounds;
 mod curvature_features;
 mod curvature_neighbourhoods;
 mod degenerate_faces;
@@ -30,6 +31,7 @@ mod duplicate_faces;
 mod edge_topology;
 mod face_normals;
 mod graph_laplacian;
+mod input_content;
 mod laplacian_eigenvectors;
 mod manifold;
 mod mass_matrix;
@@ -59,6 +61,7 @@ pub use tri_mesh::TriMesh;
 pub use boundary_loops::boundary_loops;
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use cotangent_laplacian::cotangent_laplacian;
+pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};
 pub use curvature_features::{CurvatureFeatures, curvature_features, curvature_features_with_h};
 pub use curvature_neighbourhoods::curvature_neighbourhoods;
 pub use degenerate_faces::degenerate_faces;
@@ -69,6 +72,7 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
+pub use input_content::{InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points};
 pub use laplacian_eigenvectors::{LaplacianEigenpairs, laplacian_eigenvectors};
 pub use manifold::{is_edge_manifold, is_vertex_manifold, non_manifold_vertices};
 pub use mass_matrix::lumped_mass_matrix;

@@ -11,6 +11,16 @@ pub enum Error {
     #[error(transparent)]
     Geometry(#[from] meshgnn_geometry::Error),
 
+    /// A geometry operation failed on one of several inputs; `what` says which (e.g.
+    /// `original mesh`), so the caller can name the right file.
+    #[error("{what}: {error}")]
+    GeometryOf {
+        /// Which input, e.g. `simplified mesh`.
+        what: &'static str,
+        /// The geometry error (shown in the message, so not repeated as a `source()`).
+        error: meshgnn_geometry::Error,
+    },
+
     /// An operation of the graph crate (k-NN graphs, sampling, ...) failed.
     #[error(transparent)]
     Graph(#[from] meshgnn_graph::Error),

@@ -2,22 +2,26 @@
 //! (eq. 5.3) between each original point and its nearest simplified point.
 
 use crate::metrics::nearest_value_error::nearest_value_error;
+use crate::metrics::point_cloud_evaluation::MAX_EVALUATION_CURVATURE_NEIGHBOURS;
 use crate::validate::check_points;
 use crate::{Error, Result};
 use meshgnn_geometry::{CurvatureFeatures, curvature_features};
 
 /// Eq. 5.1-5.3 on `points: #P×3` with `k` neighbours, `k` capped at `#P − 1` so that a small
-/// simplified cloud still gets features. Fails for fewer than 3 points or `k < 2`.
+/// simplified cloud still gets features. Fails for fewer than 3 points or `k` outside
+/// `2..=MAX_EVALUATION_CURVATURE_NEIGHBOURS`.
 pub(crate) fn features_for(
     what: &'static str,
     points: &[[f32; 3]],
     k: usize,
 ) -> Result<CurvatureFeatures> {
     check_points(what, points)?;
-    if k < 2 {
+    if !(2..=MAX_EVALUATION_CURVATURE_NEIGHBOURS).contains(&k) {
         return Err(Error::InvalidParameter {
             name: "k",
-            message: format!("curvature needs at least 2 neighbours, got {k}"),
+            message: format!(
+                "curvature needs 2 to {MAX_EVALUATION_CURVATURE_NEIGHBOURS} neighbours, got {k}"
+            ),
         });
     }
     if points.len() < 3 {

@@ -68,7 +68,11 @@ pub fn laplacian_error(
         || laplacian_eigenvectors(original, k),
         || laplacian_eigenvectors(simplified, k),
     );
-    let (a, b) = (a?, b?);
+    let of = |what: &'static str| move |error| Error::GeometryOf { what, error };
+    let (a, b) = (
+        a.map_err(of("original mesh"))?,
+        b.map_err(of("simplified mesh"))?,
+    );
     let mass = lumped_mass_matrix(original);
     let tree = PointIndex::new(simplified.vertices());
     let transfer: Vec<usize> = tree

@@ -1,16 +1,23 @@
 //! The mesh simplification report of thesis ch. 6.5.1 (Table 6.1): CD, NE, WA, LE, plus the
 //! Hausdorff distance, hole count and edge-manifoldness.
 
-use crate::Result;
 use crate::metrics::chamfer::chamfer_distance;
 use crate::metrics::hausdorff::hausdorff_distance;
 use crate::metrics::laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};
 use crate::metrics::normals_error::normals_error;
 use crate::metrics::watertightness::watertightness;
-use meshgnn_geometry::{TriMesh, mesh_report, sample_surface, unit_sphere_normalization};
+use crate::{Error, Result};
+use meshgnn_geometry::{
+    MAX_SURFACE_SAMPLES, TriMesh, check_count, face_areas, mesh_report, sample_surface,
+    unit_sphere_normalization,
+};
 
 /// The number of surface samples of ch. 6.5.1.
 pub const MESH_EVALUATION_SAMPLES: usize = 50_000;
+
+/// Most surface samples per mesh [`mesh_evaluation`] accepts: the geometry crate's
+/// [`MAX_SURFACE_SAMPLES`] (two clouds and their spatial indices, about 1 GB at the bound).
+pub const MAX_MESH_EVALUATION_SAMPLES: usize = MAX_SURFACE_SAMPLES;
 
 /// Metrics of a simplified mesh against its original, both normalised by the original's
 /// centroid and bounding-sphere radius (so lengths are in units of that radius).
@@ -37,7 +44,9 @@ pub struct MeshEvaluation {
 /// samples `samples` points (50 000 in the thesis) on each surface (area-weighted, from `seed`
 /// and `seed + 1`), and computes every field of [`MeshEvaluation`].
 ///
-/// Fails when a mesh has no area or the Laplacian eigen-solve fails.
+/// Fails, naming the `original mesh` or the `simplified mesh`, when a mesh has no vertices,
+/// no faces or no area, or when its Laplacian eigen-solve fails; fails on `samples` outside
+/// `1..=`[`MAX_MESH_EVALUATION_SAMPLES`] before anything is allocated.
 ///
 /// ```
 /// use meshgnn_geometry::subdivided_cube;
@@ -54,6 +63,14 @@ pub fn mesh_evaluation(
     samples: usize,
     seed: u64,
 ) -> Result<MeshEvaluation> {
+    check_count(
+        "samples",
+        samples,
+        1..=MAX_MESH_EVALUATION_SAMPLES,
+        "surface samples per mesh for CD and Hausdorff",
+    )?;
+    check_surface("original mesh", original)?;
+    check_surface("simplified mesh", simplified)?;
     let norm = unit_sphere_normalization(original.vertices())?;
     let a = original
         .clone()
@@ -66,7 +83,11 @@ pub fn mesh_evaluation(
         || sample_surface(&a, samples, seed),
         || sample_surface(&b, samples, seed),
     );
-    let (sa, sb) = (sa?, sb?);
+    let of = |what: &'static str| move |error| Error::GeometryOf { what, error };
+    let (sa, sb) = (
+        sa.map_err(of("original mesh"))?,
+        sb.map_err(of("simplified mesh"))?,
+    );
     let cd = chamfer_distance(&sa.points, &sb.points)?.symmetric_mean();
     let hausdorff = hausdorff_distance(&sa.points, &sb.points)?;
     let ne = normals_error(&a, &b)?;
@@ -81,4 +102,80 @@ pub fn mesh_evaluation(
         holes: report.boundary_loops,
         edge_manifold: report.edge_manifold,
     })
+}
+
+/// Fails, naming `what`, unless `mesh` has vertices and faces of positive total area: the
+/// metrics sample its surface and solve its Laplacian.
+fn check_surface(what: &'static str, mesh: &TriMesh) -> Result<()> {
+    let problem = if mesh.vertex_count() == 0 {
+        "no vertices".to_string()
+    } else if mesh.face_count() == 0 {
+        format!(
+            "{} vertices but no faces: there is no surface to sample",
+            mesh.vertex_count()
+        )
+    } else if !(face_areas(mesh).iter().sum::<f64>() > 0.0) {
+        format!(
+            "all {} faces have zero area: there is no surface to sample",
+            mesh.face_count()
+        )
+    } else {
+        return Ok(());
+    };
+    Err(Error::InvalidParameter {
+        name: what,
+        message: problem,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::subdivided_cube;
+
+    fn message(original: &TriMesh, simplified: &TriMesh, samples: usize) -> String {
+        match mesh_evaluation(original, simplified, samples, 0) {
+            Ok(_) => String::new(),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn each_bad_input_is_named() {
+        let cube = subdivided_cube(2);
+        let empty = TriMesh::default();
+        let cloud = TriMesh::new(cube.vertices().to_vec(), Vec::new()).unwrap_or_default();
+        let flat =
+            TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0]], vec![[0, 1, 1]]).unwrap_or_default();
+        assert_eq!(
+            message(&empty, &cube, 100),
+            "invalid original mesh: no vertices"
+        );
+        assert_eq!(
+            message(&cube, &empty, 100),
+            "invalid simplified mesh: no vertices"
+        );
+        assert_eq!(
+            message(&cloud, &cube, 100),
+            format!(
+                "invalid original mesh: {} vertices but no faces: there is no surface to sample",
+                cube.vertex_count()
+            )
+        );
+        assert_eq!(
+            message(&cube, &flat, 100),
+            "invalid simplified mesh: all 1 faces have zero area: there is no surface to sample"
+        );
+    }
+
+    #[test]
+    fn the_sample_count_is_bounded_before_sampling() {
+        let cube = subdivided_cube(2);
+        assert!(message(&cube, &cube, 0).starts_with("invalid samples: 0 is outside 1..="));
+        let huge = message(&cube, &cube, MAX_MESH_EVALUATION_SAMPLES + 1);
+        assert!(
+            huge.starts_with("invalid samples: 10000001 is outside"),
+            "{huge}"
+        );
+    }
 }

@@ -19,7 +19,9 @@ pub use chamfer::{ChamferDistance, chamfer_distance};
 pub use curvature_error::curvature_error;
 pub use hausdorff::hausdorff_distance;
 pub use laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};
-pub use mesh_evaluation::{MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation};
+pub use mesh_evaluation::{
+    MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation,
+};
 pub use morphable_model::{
     CentredShapes, Compactness, ErrorSummary, centred_shapes, compactness, generalisation,
     specificity,
@@ -29,7 +31,8 @@ pub use normal_consistency::{NormalOrientation, normal_consistency};
 pub use normals_error::normals_error;
 pub use per_vertex_error::per_vertex_error;
 pub use point_cloud_evaluation::{
-    EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation, point_cloud_evaluation,
+    EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation,
+    point_cloud_evaluation,
 };
 pub use roughness_error::roughness_error;
 pub use structural_distortion::{SdmParams, structural_distortion};

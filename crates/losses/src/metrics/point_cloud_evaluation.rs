@@ -1,16 +1,21 @@
 //! The point cloud simplification report of thesis ch. 5.4-5.5 (Table 5.1): CD, NC, CE, RE,
 //! SDM.
 
-use crate::Result;
 use crate::metrics::chamfer::chamfer_distance;
 use crate::metrics::curvature_error::features_for;
 use crate::metrics::nearest_value_error::nearest_value_error;
 use crate::metrics::normal_consistency::{NormalOrientation, normal_consistency};
 use crate::metrics::structural_distortion::{SdmParams, structural_distortion};
+use crate::{Error, Result};
 use meshgnn_geometry::unit_sphere_normalization;
 
 /// Neighbourhood size for the curvature features (eq. 5.1-5.3) of the evaluation.
 pub const EVALUATION_CURVATURE_NEIGHBOURS: usize = 16;
+
+/// Most curvature neighbours `k` the evaluation accepts: the features keep `k` neighbour
+/// indices per point, so a million-point cloud at the bound already holds 1 GB of them, and
+/// neighbourhoods that large average curvature over much of the shape.
+pub const MAX_EVALUATION_CURVATURE_NEIGHBOURS: usize = 256;
 
 /// Metrics of a simplified point cloud against its original, both normalised by the original's
 /// centroid and bounding-sphere radius.
@@ -34,7 +39,9 @@ pub struct PointCloudEvaluation {
 /// geometry crate with `k` neighbours (16 in [`EVALUATION_CURVATURE_NEIGHBOURS`], capped at
 /// `#P − 1`) on each cloud; PCA normals are unoriented, so NC uses `1 − |cos|`.
 ///
-/// Fails when a cloud has fewer than 3 points or holds non-finite coordinates.
+/// Fails, naming the `original points` or the `simplified points`, when a cloud has fewer
+/// than 3 points or holds non-finite coordinates; fails on `k` outside
+/// `2..=`[`MAX_EVALUATION_CURVATURE_NEIGHBOURS`].
 ///
 /// ```
 /// use meshgnn_geometry::icosphere;
@@ -50,7 +57,10 @@ pub fn point_cloud_evaluation(
     simplified: &[[f32; 3]],
     k: usize,
 ) -> Result<PointCloudEvaluation> {
-    let norm = unit_sphere_normalization(original)?;
+    let norm = unit_sphere_normalization(original).map_err(|error| Error::GeometryOf {
+        what: "original points",
+        error,
+    })?;
     let a = norm.apply(original);
     let b = norm.apply(simplified);
     let (fa, fb) = rayon::join(
@@ -131,6 +141,27 @@ mod tests {
         let re = roughness_error(&full, &five, 16).unwrap();
         assert!((e.ce - ce).abs() < 1e-4 * ce.max(1e-6), "{} vs {ce}", e.ce);
         assert!((e.re - re).abs() < 1e-4 * re.max(1e-6), "{} vs {re}", e.re);
+    }
+
+    #[test]
+    fn bad_inputs_are_named() {
+        let p = icosphere(2).vertices().to_vec();
+        let message =
+            |a: &[[f32; 3]], b: &[[f32; 3]], k: usize| match point_cloud_evaluation(a, b, k) {
+                Ok(_) => String::new(),
+                Err(e) => e.to_string(),
+            };
+        assert_eq!(message(&[], &p, 16), "original points: points is empty");
+        assert_eq!(message(&p, &[], 16), "simplified points is empty");
+        assert_eq!(
+            message(&p, &p[..2], 16),
+            "invalid simplified points: curvature needs at least 3 points, got 2"
+        );
+        assert_eq!(
+            message(&p, &p, 0),
+            "invalid k: curvature needs 2 to 256 neighbours, got 0"
+        );
+        assert!(message(&p, &p, MAX_EVALUATION_CURVATURE_NEIGHBOURS + 1).contains("got 257"));
     }
 
     #[test]

@@ -1,0 +1,169 @@
+//! Bad files and odd arguments: every subcommand refuses them with one line that names the
+//! right file (or flag) and the problem, and exits non-zero.
+#![allow(clippy::expect_used, clippy::unwrap_used)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs a command that must fail; returns its stderr, which must be one line.
+fn refused(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_pcsimplify"))
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    stderr
+}
+
+fn write(dir: &Path, name: &str, content: &str) -> String {
+    let path: PathBuf = dir.join(name);
+    std::fs::write(&path, content).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// 64 points on a 4×4×4 grid.
+fn grid() -> String {
+    (0..64)
+        .map(|i| format!("{} {} {}\n", i % 4, (i / 4) % 4, i / 16))
+        .collect()
+}
+
+#[test]
+fn an_empty_or_random_text_cloud_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.xyz");
+    for (name, content) in [("empty.obj", ""), ("random.obj", "zz9 qq !!\n#x\n")] {
+        let input = write(dir.path(), name, content);
+        let message = refused(&[
+            "simplify",
+            &input,
+            "-o",
+            out.to_str().unwrap(),
+            "--ratio",
+            "0.5",
+            "--method",
+            "fps",
+        ]);
+        assert!(
+            message.contains(&format!("{input}: content: no vertices")),
+            "{message}"
+        );
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn tiny_clouds_name_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.xyz");
+    let out = out.to_str().unwrap();
+    let two = write(dir.path(), "two.xyz", "0 0 0\n1 0 0\n");
+    let three = write(dir.path(), "three.xyz", "0 0 0\n1 0 0\n0 1 0\n");
+    for (input, args, problem) in [
+        (
+            &three,
+            ["--ratio", "0.1", "--method", "fps"],
+            "keeps 0 of 3 points",
+        ),
+        (
+            &two,
+            ["--ratio", "1", "--method", "tcp"],
+            "TCP needs at least 3 points",
+        ),
+        (
+            &three,
+            ["--points", "4", "--method", "random"],
+            "the input has only 3",
+        ),
+    ] {
+        let mut command = vec!["simplify", input.as_str(), "-o", out];
+        command.extend(args);
+        let message = refused(&command);
+        assert!(
+            message.contains(&format!("simplifying {input}: ")) && message.contains(problem),
+            "{message}"
+        );
+    }
+}
+
+#[test]
+fn eval_names_the_cloud_that_is_too_small() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = write(dir.path(), "original.xyz", &grid());
+    let simplified = write(dir.path(), "simplified.xyz", "0 0 0\n1 0 0\n");
+    let message = refused(&["eval", &original, &simplified]);
+    assert!(
+        message.contains(&format!(
+            "evaluating {simplified} against the original {original}: invalid simplified \
+             points: curvature needs at least 3 points, got 2"
+        )),
+        "{message}"
+    );
+    let empty = write(dir.path(), "empty.xyz", "");
+    let message = refused(&["eval", &empty, &original]);
+    assert!(
+        message.contains(&format!(
+            "reading the original cloud: {empty}: content: no vertices"
+        )),
+        "{message}"
+    );
+}
+
+#[test]
+fn curvature_neighbours_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = write(dir.path(), "cloud.xyz", &grid());
+    for k in ["0", "1", "257"] {
+        let message = refused(&["eval", &cloud, &cloud, "--k", k]);
+        assert!(
+            message.contains(&format!("invalid --k: {k} is outside 2..=256")),
+            "{message}"
+        );
+        let message = refused(&["bench", dir.path().to_str().unwrap(), "--k", k]);
+        assert!(
+            message.contains(&format!("invalid --k: {k} is outside 2..=256")),
+            "{message}"
+        );
+    }
+}
+
+#[test]
+fn bench_refuses_an_empty_folder_and_nonsense_ratios() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    assert!(refused(&["bench", d]).contains("holds no cloud or mesh"));
+    for ratio in ["0", "1.5", "NaN"] {
+        let message = refused(&["bench", d, "--ratios", ratio]);
+        assert!(message.contains("is not in (0, 1]"), "{message}");
+    }
+}
+
+#[test]
+fn train_counts_are_bounded_before_the_data_is_read() {
+    let missing = "no-such-dataset";
+    for (flag, value, expected) in [
+        ("--points", "0", "invalid --points: 0 is outside 16..=65536"),
+        (
+            "--points",
+            "1000000",
+            "invalid --points: 1000000 is outside",
+        ),
+        ("--epochs", "0", "invalid --epochs: 0 is outside 1..=100000"),
+        (
+            "--clouds-per-shape",
+            "1000",
+            "invalid --clouds-per-shape: 1000",
+        ),
+        (
+            "--learning-rate",
+            "NaN",
+            "--learning-rate NaN: must be finite and > 0",
+        ),
+        ("--tau", "0", "--tau 0: must be finite and > 0"),
+    ] {
+        let message = refused(&["train", missing, "-o", "w.safetensors", flag, value]);
+        assert!(message.contains(expected), "{flag} {value}: {message}");
+    }
+}
