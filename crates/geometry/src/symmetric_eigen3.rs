@@ -1,10 +1,23 @@
-//! Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations in `f64`: robust
-//! for repeated and zero eigenvalues (flat or isotropic neighbourhoods), where closed-form
-//! cubic solutions lose accuracy. Used by the covariance analysis of thesis eq. 5.1-5.2.
+//! Eigen-decomposition of a symmetric 3×3 matrix, for the covariance analysis of thesis eq.
+//! 5.1-5.2 (PCA normals and curvature, and the differentiable mean curvature of the losses).
+//!
+//! nalgebra's `SymmetricEigen` (Householder tridiagonalisation and implicit QR with Wilkinson
+//! shifts, `f64`), the design card's dense linear algebra: on the 1-ring covariances of a noisy
+//! 163 842-vertex sphere, the curvature hot loop's input, it took 2.9-3.0 µs per matrix against
+//! 3.2-3.6 µs for the cyclic Jacobi rotations it replaced, with the same accuracy (largest
+//! residual `|Ax − λx| / max|A|` 2.8e-15 vs 2.3e-15) and normals within 5e-8 rad (docs/io.md,
+//! "Design-card crates", has the command). Zero and non-finite matrices never reach the
+//! iteration: every vector is an eigenvector of zero, and NaN has no decomposition to find.
+
+use nalgebra::Matrix3;
+
+/// Iteration cap: a finite symmetric 3×3 converges in a handful of QR sweeps.
+const MAX_ITERATIONS: usize = 64;
 
 /// Eigenvalues ascending and the matching unit eigenvectors (`vectors[i]` for `values[i]`) of
 /// the symmetric matrix `a` (only its upper triangle is read). Public so that differentiable
-/// versions of eq. 5.2 (the losses crate) take the same eigenvectors as the metrics.
+/// versions of eq. 5.2 (the losses crate) take the same eigenvectors as the metrics. A zero or
+/// non-finite `a` gives its diagonal and the coordinate axes.
 ///
 /// ```
 /// use meshgnn_geometry::symmetric_eigen3;
@@ -13,51 +26,30 @@
 /// assert!((vectors[0][0] + vectors[0][1]).abs() < 1e-12 && vectors[0][2].abs() < 1e-12);
 /// ```
 pub fn symmetric_eigen3(a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
-    let mut m = [
-        [a[0][0], a[0][1], a[0][2]],
-        [a[0][1], a[1][1], a[1][2]],
-        [a[0][2], a[1][2], a[2][2]],
-    ];
-    // Columns of v are the eigenvectors.
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let scale = m.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
-    if scale > 0.0 && scale.is_finite() {
-        for _sweep in 0..32 {
-            let off = m[0][1].abs() + m[0][2].abs() + m[1][2].abs();
-            if off <= 1e-300 || off <= f64::EPSILON * 1e-3 * scale {
-                break;
-            }
-            for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-                if m[p][q] == 0.0 {
-                    continue;
-                }
-                let theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                // m ← Jᵀ m J with the rotation J in the (p, q) plane.
-                for row in &mut m {
-                    let (mkp, mkq) = (row[p], row[q]);
-                    row[p] = c * mkp - s * mkq;
-                    row[q] = s * mkp + c * mkq;
-                }
-                let (rp, rq) = (m[p], m[q]);
-                m[p] = [0, 1, 2].map(|k| c * rp[k] - s * rq[k]);
-                m[q] = [0, 1, 2].map(|k| s * rp[k] + c * rq[k]);
-                for row in &mut v {
-                    let (vp, vq) = (row[p], row[q]);
-                    row[p] = c * vp - s * vq;
-                    row[q] = s * vp + c * vq;
-                }
-            }
+    let axes = (
+        [a[0][0], a[1][1], a[2][2]],
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+    );
+    let m = Matrix3::new(
+        a[0][0], a[0][1], a[0][2], //
+        a[0][1], a[1][1], a[1][2], //
+        a[0][2], a[1][2], a[2][2],
+    );
+    let scale = m.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+    let (values, vectors) = if scale > 0.0 && scale.is_finite() {
+        match m.try_symmetric_eigen(f64::EPSILON, MAX_ITERATIONS) {
+            Some(e) => (
+                [0, 1, 2].map(|i| e.eigenvalues[i]),
+                [0, 1, 2].map(|i| [0, 1, 2].map(|r| e.eigenvectors[(r, i)])),
+            ),
+            None => axes,
         }
-    }
+    } else {
+        axes
+    };
     let mut order = [0usize, 1, 2];
-    order.sort_by(|&i, &j| m[i][i].total_cmp(&m[j][j]));
-    let values = order.map(|i| m[i][i]);
-    let vectors = order.map(|i| [v[0][i], v[1][i], v[2][i]]);
-    (values, vectors)
+    order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
+    (order.map(|i| values[i]), order.map(|i| vectors[i]))
 }
 
 #[cfg(test)]

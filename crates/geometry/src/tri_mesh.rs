@@ -193,7 +193,7 @@ pub(crate) fn check_finite<const N: usize>(
     element: &'static str,
     values: &[[f32; N]],
 ) -> Result<()> {
-    match values.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+    match crate::vec3::first_non_finite(values) {
         Some(index) => Err(Error::NonFinite { element, index }),
         None => Ok(()),
     }

@@ -1,5 +1,20 @@
 //! Small `f64` vector helpers, shared by the operators of every meshgnn crate so quadrics,
-//! predicates and normals use one definition.
+//! predicates and normals use one definition, and the one finiteness scan behind every crate's
+//! input check.
+
+/// Index of the first element of `values: #N×K` with a NaN or infinite component, if any: the
+/// scan behind each crate's `check_finite`, which wraps the index in its own error.
+///
+/// ```
+/// use meshgnn_geometry::vec3::first_non_finite;
+/// assert_eq!(first_non_finite(&[[0.0f32, 1.0, 2.0], [3.0, f32::NAN, 0.0]]), Some(1));
+/// assert_eq!(first_non_finite(&[[0.0f32, 1.0], [f32::INFINITY, 0.0]]), Some(1));
+/// assert_eq!(first_non_finite::<3>(&[[1.0, 2.0, 3.0]]), None);
+/// ```
+#[inline]
+pub fn first_non_finite<const K: usize>(values: &[[f32; K]]) -> Option<usize> {
+    values.iter().position(|v| v.iter().any(|x| !x.is_finite()))
+}
 
 /// `p` widened to `f64`.
 #[inline]

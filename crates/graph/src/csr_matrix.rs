@@ -10,7 +10,15 @@
 //!   `[i·C, (i+1)·C)`; this is the layout of a contiguous candle tensor `(rows, C)`.
 //! - Products accumulate each output entry in `f64`, so results are independent of the thread
 //!   count and of the order of the sparse entries.
+//!
+//! # The one conversion boundary
+//! Geometry's spectral operators (graph and cotangent Laplacians, thesis eq. 2.13-2.14) are
+//! `f64` `faer::sparse::SparseColMat`s, the form faer's sparse Cholesky/LU in the Laplacian
+//! eigen-solver consumes; everything applied to features is a `CsrMatrix`. The crossing from
+//! one to the other is [`CsrMatrix::from_faer`] and nowhere else (docs/architecture.md,
+//! "Sparse matrices").
 
+use meshgnn_geometry::faer::sparse::SparseColMat;
 use rayon::prelude::*;
 
 use crate::{Error, Result};
@@ -181,6 +189,37 @@ impl CsrMatrix {
             col_indices,
             values,
         })
+    }
+
+    /// A geometry operator (`f64`, compressed sparse column, e.g. a Laplacian of
+    /// `meshgnn_geometry`) as a `CsrMatrix`, each value rounded once to `f32`: the one
+    /// conversion between the two sparse types (module docs). O(nnz log nnz).
+    ///
+    /// Errors when a value is not finite or overflows `f32`, or a dimension does not fit `u32`.
+    ///
+    /// ```
+    /// use meshgnn_geometry::combinatorial_laplacian;
+    /// use meshgnn_graph::CsrMatrix;
+    /// let l = CsrMatrix::from_faer(&combinatorial_laplacian(3, &[[0, 1], [1, 2]])?)?;
+    /// assert_eq!((l.get(1, 1), l.get(0, 1), l.get(0, 2)), (2.0, -1.0, 0.0));
+    /// assert_eq!(l.mul_dense(&[1.0; 3], 1)?, vec![0.0; 3]); // L·1 = 0
+    /// # Ok::<(), meshgnn_graph::Error>(())
+    /// ```
+    pub fn from_faer(matrix: &SparseColMat<usize, f64>) -> Result<Self> {
+        let (rows, cols) = (matrix.nrows(), matrix.ncols());
+        if u32::try_from(rows).is_err() {
+            return Err(Error::InvalidParameter {
+                name: "rows",
+                message: format!("{rows} rows do not fit u32 row indices"),
+            });
+        }
+        // In range: both dimensions fit u32 (rows above, cols in `from_triplets`).
+        let triplets: Vec<(u32, u32, f32)> = matrix
+            .as_ref()
+            .triplet_iter()
+            .map(|t| (t.row as u32, t.col as u32, *t.val as f32))
+            .collect();
+        Self::from_triplets(rows, cols, &triplets)
     }
 
     /// The `n × n` identity.
@@ -485,6 +524,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn from_faer_keeps_every_entry_of_a_cotangent_laplacian() {
+        let sphere = meshgnn_geometry::icosphere(2);
+        let l = meshgnn_geometry::cotangent_laplacian(&sphere).unwrap();
+        let m = CsrMatrix::from_faer(&l).unwrap();
+        assert_eq!(
+            (m.rows(), m.cols(), m.nnz()),
+            (l.nrows(), l.ncols(), l.as_ref().triplet_iter().count())
+        );
+        let dense = l.to_dense();
+        for r in 0..m.rows() {
+            for c in 0..m.cols() {
+                assert_eq!(m.get(r, c), dense[(r, c)] as f32);
+            }
+        }
+        // L·1 = 0 survives the rounding to f32 (up to it).
+        let ones = vec![1.0f32; m.cols()];
+        let scale = m.values().iter().fold(0.0f32, |a, v| a.max(v.abs()));
+        assert!(
+            m.mul_dense(&ones, 1)
+                .unwrap()
+                .iter()
+                .all(|x| x.abs() < 1e-6 * scale)
+        );
+        let huge =
+            meshgnn_geometry::faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(
+                1,
+                1,
+                &[meshgnn_geometry::faer::sparse::Triplet::new(0, 0, 1e300)],
+            )
+            .unwrap();
+        assert!(matches!(
+            CsrMatrix::from_faer(&huge),
+            Err(Error::NonFinite { .. })
+        ));
     }
 
     #[test]

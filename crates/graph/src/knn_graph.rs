@@ -20,7 +20,7 @@ use crate::{Error, Result};
 
 /// Checks that every coordinate is finite; the error names the first bad point.
 pub(crate) fn check_finite(points: &[[f32; 3]], what: &'static str) -> Result<()> {
-    match points.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+    match meshgnn_geometry::vec3::first_non_finite(points) {
         Some(index) => Err(Error::NonFinite { what, index }),
         None => Ok(()),
     }

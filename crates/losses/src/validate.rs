@@ -13,7 +13,7 @@ pub(crate) fn check_points(what: &'static str, points: &[[f32; 3]]) -> Result<()
 
 /// Fails with [`Error::NonFinite`] at the first point with a NaN or infinite coordinate.
 pub(crate) fn check_finite(what: &'static str, points: &[[f32; 3]]) -> Result<()> {
-    match points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+    match meshgnn_geometry::vec3::first_non_finite(points) {
         Some(index) => Err(Error::NonFinite { what, index }),
         None => Ok(()),
     }

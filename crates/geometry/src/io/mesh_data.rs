@@ -116,7 +116,7 @@ fn check_finite<const N: usize>(
     what: &str,
     values: &[[f32; N]],
 ) -> Result<()> {
-    match values.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+    match crate::vec3::first_non_finite(values) {
         Some(index) => Err(format_error(
             path,
             format!("{element} {index}"),
