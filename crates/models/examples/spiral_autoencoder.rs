@@ -18,7 +18,7 @@ use meshgnn_models::MorphableModel;
 use meshgnn_models::spiral::{
     SpiralAutoencoderConfig, SpiralTraining, TemplateTensors, mesh_batch,
 };
-use meshgnn_models::training::{TrainingConfig, train};
+use meshgnn_models::training::{self, TrainingConfig};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -78,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let mut task = SpiralTraining::new(&template, &config, &train, &test, 0, &device)?;
-    let trained = train(&mut task, &train_config, &mut |p| {
+    let trained = training::train(&mut task, &train_config, &mut |p| {
         if p.epoch_end {
             println!(
                 "epoch {:3}/{}  train L1 {:.4}  train {:.3} mm  test {:.3} mm",

@@ -262,7 +262,7 @@ fn fit_all(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::handy::spiral::test_fixtures::deformed_shapes;
+    use crate::handy::spiral::test_fixtures::varied_shapes as deformed_shapes;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     #[test]

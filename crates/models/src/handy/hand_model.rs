@@ -172,7 +172,7 @@ pub fn check_registered(model: &dyn MorphableModel, mesh: &TriMesh, file: &Path)
 mod tests {
     use super::*;
     use crate::handy::spiral::VertexNormalization;
-    use crate::handy::spiral::test_fixtures::{deformed_shapes, tiny_config};
+    use crate::handy::spiral::test_fixtures::{deformed_shapes, tiny_config, varied_shapes};
 
     fn spiral_bytes(with_gaussian: bool) -> Vec<u8> {
         let sphere = meshgnn_geometry::icosphere(2);
@@ -196,7 +196,7 @@ mod tests {
         assert_eq!(spiral.kind(), "Handy++ (spiral autoencoder)");
         assert_eq!(spiral.gaussian, LatentGaussian::standard(8));
         let sphere = meshgnn_geometry::icosphere(2);
-        let pca = Pca::fit(&sphere, &deformed_shapes(&sphere, 4), 2).unwrap();
+        let pca = Pca::fit(&sphere, &varied_shapes(&sphere, 4), 2).unwrap();
         let loaded = LoadedHandModel::from_bytes(&pca.to_bytes().unwrap(), "p").unwrap();
         assert_eq!(
             (loaded.kind(), loaded.model.latent_size()),
@@ -223,7 +223,7 @@ mod tests {
     #[test]
     fn registration_is_checked_against_the_template() {
         let sphere = meshgnn_geometry::icosphere(2);
-        let pca = Pca::fit(&sphere, &deformed_shapes(&sphere, 4), 2).unwrap();
+        let pca = Pca::fit(&sphere, &varied_shapes(&sphere, 4), 2).unwrap();
         assert!(check_registered(&pca, &sphere, Path::new("a.ply")).is_ok());
         let other = meshgnn_geometry::icosphere(1);
         let err = check_registered(&pca, &other, Path::new("b.ply")).unwrap_err();

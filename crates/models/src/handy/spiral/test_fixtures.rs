@@ -36,3 +36,17 @@ pub(crate) fn deformed_shapes(template: &TriMesh, count: usize) -> Vec<Vec<[f32;
         })
         .collect()
 }
+
+/// `count` shapes of full PCA rank: [`deformed_shapes`] plus a small deterministic offset of
+/// every vertex that differs from shape to shape.
+pub(crate) fn varied_shapes(template: &TriMesh, count: usize) -> Vec<Vec<[f32; 3]>> {
+    let mut shapes = deformed_shapes(template, count);
+    for (i, shape) in shapes.iter_mut().enumerate() {
+        for (v, p) in shape.iter_mut().enumerate() {
+            for (c, x) in p.iter_mut().enumerate() {
+                *x += 0.01 * ((i * 7 + v * 3 + c * 5) % 11) as f32;
+            }
+        }
+    }
+    shapes
+}
