@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_geometry::{OutputGuard, check_count};
 use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralTraining};
-use meshgnn_models::training::{TrainingConfig, train};
+use meshgnn_models::training::{self, TrainingConfig};
 use meshgnn_models::{
     LATENT_GAUSSIAN_KEY, MAX_BATCH_SIZE, MAX_EPOCHS, MAX_LATENT_SIZE, generalisation_error,
     latent_gaussian,
@@ -153,7 +153,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         &Device::Cpu,
     )?;
     let mut last_val = None;
-    let trained = train(&mut task, &config, &mut |p| {
+    let trained = training::train(&mut task, &config, &mut |p| {
         bar.set_position(p.step);
         if let Some(v) = p.validation {
             last_val = Some(v);
