@@ -19,7 +19,8 @@ fn point_simplifier(c: &mut Criterion) {
     let points = sample_surface(&subdivided_cube(16), n, 3)
         .expect("cube has area")
         .points;
-    let model = PointSimplifier::pretrained().expect("bundled weights load");
+    let model = meshgnn_models::pretrained::load::<PointSimplifier>("point_simplifier")
+        .expect("bundled weights load");
     let mut group = c.benchmark_group("point_simplifier");
     group
         .sample_size(10)

@@ -199,7 +199,7 @@ fn bench_file(
             }
             let selection = select(method, &input, count, args.seed, model)
                 .with_context(|| format!("{name}: {} at ratio {ratio}", method.name()))?;
-            let kept = selection.kept_points(&input);
+            let kept = selection.kept_points(&input.points);
             let e = point_cloud_evaluation(&clean.points, &kept, args.k).with_context(|| {
                 format!("{name}: evaluating {} at ratio {ratio}", method.name())
             })?;

@@ -340,9 +340,8 @@ fn bench_prints_every_method_and_ratio_as_markdown_and_json() {
 #[test]
 fn neural_simplify_with_weights_file_reports_the_time_split() {
     use candle_core::{DType, Device};
-    use meshgnn_models::point_simplifier::{
-        PointSimplifier, PointSimplifierConfig, write_checkpoint,
-    };
+    use meshgnn_models::Checkpoint;
+    use meshgnn_models::point_simplifier::{PointSimplifier, PointSimplifierConfig};
     let dir = tempfile::tempdir().unwrap();
     // Untrained weights: the CLI path, not the model's quality, is under test.
     let map = candle_nn::VarMap::new();
@@ -360,7 +359,12 @@ fn neural_simplify_with_weights_file_reports_the_time_split() {
         .map(|(k, v)| (k.clone(), v.as_tensor().clone()))
         .collect();
     let weights = dir.path().join("w.safetensors");
-    write_checkpoint(&weights, &tensors, &config, None).unwrap();
+    Checkpoint {
+        header: config.header(),
+        tensors: tensors.into_iter().collect(),
+    }
+    .save(&weights)
+    .unwrap();
 
     let input = dir.path().join("sphere.obj");
     meshgnn_geometry::write_mesh(&input, &meshgnn_geometry::icosphere(3)).unwrap();

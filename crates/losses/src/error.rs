@@ -26,6 +26,7 @@ pub enum Error {
     Graph(#[from] meshgnn_graph::Error),
 
     /// A tensor operation failed (wrong dtype, device, shape given to candle).
+    #[cfg(feature = "candle")]
     #[error("tensor operation: {0}")]
     Tensor(#[from] candle_core::Error),
 

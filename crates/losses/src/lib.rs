@@ -20,6 +20,7 @@
 
 mod deterministic_sum;
 mod error;
+#[cfg(feature = "candle")]
 pub mod losses;
 pub mod metrics;
 mod morton_order;

@@ -4,8 +4,8 @@
 
 use std::time::{Duration, Instant};
 
-use meshgnn_geometry::unit_sphere_normalization;
 use meshgnn_geometry::SpatialIndex;
+use meshgnn_geometry::unit_sphere_normalization;
 use meshgnn_graph::CsrMatrix;
 
 use super::latent_sampling::spatial_order;
@@ -46,7 +46,7 @@ impl PointSimplifier {
     /// ```
     /// use meshgnn_geometry::icosphere;
     /// use meshgnn_models::point_simplifier::{PointSimplifier, SimplifyOptions};
-    /// let model = PointSimplifier::pretrained()?;
+    /// let model: PointSimplifier = meshgnn_models::pretrained::load("point_simplifier")?;
     /// let sphere = icosphere(4).vertices().to_vec(); // 2562 points
     /// let out = model.simplify(&sphere, None, None, 128, &SimplifyOptions::default())?;
     /// assert_eq!(out.points.len(), 128);
