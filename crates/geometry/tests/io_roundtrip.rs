@@ -151,15 +151,16 @@ fn coordinate() -> impl Strategy<Value = f32> {
     prop::num::f32::NORMAL | prop::num::f32::SUBNORMAL | prop::num::f32::ZERO
 }
 
-/// A mesh of 1–24 vertices and 0–24 triangles over them (degenerate and repeated faces
-/// included), with unit-free normals.
+/// A mesh of 1–24 vertices and 1–24 triangles over them (degenerate and repeated faces
+/// included), with unit-free normals. At least one triangle: a faceless mesh is written to
+/// GLB as a point primitive, which reads back as a point cloud, not a mesh.
 fn arbitrary_mesh() -> impl Strategy<Value = TriMesh> {
     (1usize..24).prop_flat_map(|count| {
         let point = || [coordinate(), coordinate(), coordinate()];
         let index = 0..count as u32;
         (
             prop::collection::vec(point(), count),
-            prop::collection::vec([index.clone(), index.clone(), index], 0..24),
+            prop::collection::vec([index.clone(), index.clone(), index], 1..24),
             prop::collection::vec(point(), count),
         )
             .prop_map(|(vertices, triangles, normals)| {
@@ -198,7 +199,29 @@ proptest! {
             let back = read_mesh(path).unwrap();
             prop_assert_eq!(back.vertices(), mesh.vertices(), "{:?}", path);
             prop_assert_eq!(back.triangles(), mesh.triangles(), "{:?}", path);
-            prop_assert_eq!(back.normals(), mesh.normals(), "{:?}", path);
+            // glTF normals are unit vectors by the specification and are renormalised on
+            // read, so arbitrary normals are compared in the other formats only. OBJ binds
+            // normals to vertices through the faces (`f a//a`): a vertex no face uses keeps
+            // no normal in that format, so only used vertices are compared there.
+            let extension = path.extension().and_then(|e| e.to_str());
+            if extension == Some("glb") {
+                continue;
+            }
+            let used: Vec<bool> = (0..mesh.vertices().len())
+                .map(|v| {
+                    extension != Some("obj")
+                        || mesh.triangles().iter().any(|t| t.contains(&(v as u32)))
+                })
+                .collect();
+            let (Some(got), Some(want)) = (back.normals(), mesh.normals()) else {
+                prop_assert!(false, "{:?}: normals lost", path);
+                continue;
+            };
+            for (v, keep) in used.iter().enumerate() {
+                if *keep {
+                    prop_assert_eq!(got[v], want[v], "{:?} vertex {}", path, v);
+                }
+            }
         }
         let path = dir.path().join("m.xyz");
         write_mesh(&path, &mesh).unwrap();

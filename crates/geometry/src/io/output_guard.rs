@@ -58,7 +58,10 @@ impl Input {
 /// std::fs::write(&scan, "v 0 0 0\n")?;
 /// let guard = OutputGuard::new([&scan]);
 /// assert!(guard.check(&dir.path().join("fit.obj")).is_ok());
-/// let refused = guard.check(&dir.path().join(".").join("scan.obj")).unwrap_err();
+/// assert!(guard.check(&scan).unwrap_err().to_string().contains("it is the input"));
+/// std::fs::create_dir(dir.path().join("sub"))?;
+/// let climbing = dir.path().join("sub").join("..").join("scan.obj");
+/// let refused = guard.check(&climbing).unwrap_err();
 /// assert!(refused.to_string().contains("resolves to the input"));
 /// # Ok(()) }
 /// ```
