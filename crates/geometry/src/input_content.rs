@@ -53,7 +53,12 @@ pub fn check_input_points(path: &Path, points: &[[f32; 3]]) -> Result<()> {
             "no vertices: the file is empty or is not in the format its extension names".into(),
         ));
     }
-    let outside = |c: &f32| !(c.abs() <= MAX_COORDINATE_MAGNITUDE);
+    // NaN fails the `is_some_and` too, so it counts as outside.
+    let outside = |c: &f32| {
+        !c.abs()
+            .partial_cmp(&MAX_COORDINATE_MAGNITUDE)
+            .is_some_and(|o| o.is_le())
+    };
     if let Some((index, p)) = points
         .iter()
         .enumerate()
@@ -108,7 +113,7 @@ pub fn check_input_mesh(path: &Path, mesh: &TriMesh, usage: InputUse) -> Result<
         )));
     }
     let area: f64 = face_areas(mesh).iter().sum();
-    if !(area > 0.0) {
+    if !area.partial_cmp(&0.0).is_some_and(|o| o.is_gt()) {
         return Err(fail(format!(
             "all {} faces have zero area (repeated or collinear vertices): there is no surface",
             mesh.face_count()

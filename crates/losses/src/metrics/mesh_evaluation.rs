@@ -114,7 +114,12 @@ fn check_surface(what: &'static str, mesh: &TriMesh) -> Result<()> {
             "{} vertices but no faces: there is no surface to sample",
             mesh.vertex_count()
         )
-    } else if !(face_areas(mesh).iter().sum::<f64>() > 0.0) {
+    } else if !face_areas(mesh)
+        .iter()
+        .sum::<f64>()
+        .partial_cmp(&0.0)
+        .is_some_and(|o| o.is_gt())
+    {
         format!(
             "all {} faces have zero area: there is no surface to sample",
             mesh.face_count()
