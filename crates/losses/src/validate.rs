@@ -41,6 +41,7 @@ pub(crate) fn check_len(what: &'static str, expected: usize, actual: usize) -> R
 }
 
 /// Fails with [`Error::IndexOutOfRange`] at the first face referring to a vertex `>= count`.
+#[cfg(feature = "candle")]
 pub(crate) fn check_faces(what: &'static str, faces: &[[u32; 3]], count: usize) -> Result<()> {
     for (index, f) in faces.iter().enumerate() {
         if let Some(&value) = f.iter().find(|&&v| v as usize >= count) {

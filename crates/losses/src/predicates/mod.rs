@@ -14,6 +14,7 @@ pub use edge_crossing_count::edge_crossing_count;
 pub use point_in_triangle::{InsideTolerance, point_in_triangle};
 pub use segment_triangle::segment_crosses_triangle;
 pub use segments_cross::segments_cross;
+#[cfg(feature = "candle")]
 pub(crate) use triangle_lattice::barycentric_point;
 pub use triangle_lattice::triangle_lattice;
 pub use triangles_intersect::triangles_intersect;
