@@ -127,6 +127,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             (rows, skipped)
         },
     );
+    if rows.is_empty()
+        && let Some(first) = skipped.first()
+    {
+        bail!(
+            "no file in {} could be benchmarked ({} skipped; first: {} {})",
+            args.dir.display(),
+            skipped.len(),
+            first["file"].as_str().unwrap_or_default(),
+            first["reason"].as_str().unwrap_or_default()
+        );
+    }
     let names: Vec<String> = files.iter().map(|p| file_name(p)).collect();
     let report = to_json(args, &names, &rows, &skipped);
     if let Some(path) = &args.json_out {
@@ -172,7 +183,14 @@ fn bench_file(
     path: &Path,
 ) -> Result<(Vec<Row>, Vec<Value>)> {
     let name = file_name(path);
-    let clean = read_input(path)?;
+    // A file that cannot be read is listed with its error and the folder run goes on.
+    let clean = match read_input(path) {
+        Ok(clean) => clean,
+        Err(e) => {
+            let reason = format!("{e:#}");
+            return Ok((Vec::new(), vec![json!({ "file": name, "reason": reason })]));
+        }
+    };
     let input: Input = if args.noise > 0.0 {
         let noisy = gaussian_noise(
             &clean.points,
@@ -189,7 +207,9 @@ fn bench_file(
     for &ratio in &args.ratios {
         let count = target_count(n, Some(ratio), None).with_context(|| name.clone())?;
         if count < 3 {
-            bail!("{name}: ratio {ratio} keeps {count} points; the metrics need at least 3");
+            let reason = format!("ratio {ratio} keeps {count} points; the metrics need at least 3");
+            skipped.push(json!({ "file": name, "ratio": ratio, "reason": reason }));
+            continue;
         }
         for &method in &args.methods {
             if method == Method::Qem && input.mesh.is_none() {
@@ -360,10 +380,26 @@ fn to_markdown(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Valu
         out.push('\n');
     }
     if !skipped.is_empty() {
-        out.push_str(&format!(
-            "\nSkipped (qem needs faces): {} file × method pairs.\n",
-            skipped.len()
-        ));
+        out.push_str("\nSkipped:\n");
+        for s in skipped {
+            let field = |key: &str| {
+                s.get(key)
+                    .map(|v| v.as_str().map_or_else(|| v.to_string(), str::to_owned))
+            };
+            let what = [
+                field("file"),
+                field("method"),
+                field("ratio").map(|r| format!("ratio {r}")),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join(", ");
+            out.push_str(&format!(
+                "- {what}: {}\n",
+                field("reason").unwrap_or_default()
+            ));
+        }
     }
     out
 }

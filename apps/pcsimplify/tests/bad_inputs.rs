@@ -167,3 +167,59 @@ fn train_counts_are_bounded_before_the_data_is_read() {
         assert!(message.contains(expected), "{flag} {value}: {message}");
     }
 }
+
+#[test]
+fn bench_lists_unreadable_files_and_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "a_good.xyz", &grid());
+    write(dir.path(), "b_text.obj", "this is not a mesh\n");
+    write(dir.path(), "c_nan.xyz", "0 0 0\n1 nan 0\n0 1 0\n0 0 1\n");
+    let d = dir.path().to_str().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pcsimplify"))
+        .args(["bench", d, "--methods", "fps", "--ratios", "0.5", "--json"])
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let per_file = report["per_file"].as_array().unwrap();
+    assert_eq!(per_file.len(), 1);
+    assert_eq!(per_file[0]["file"], "a_good.xyz");
+    let skipped = report["skipped"].as_array().unwrap();
+    let files: Vec<&str> = skipped
+        .iter()
+        .map(|s| s["file"].as_str().unwrap())
+        .collect();
+    assert_eq!(files, ["b_text.obj", "c_nan.xyz"]);
+    assert!(
+        skipped[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("b_text.obj")
+    );
+    assert!(
+        skipped[1]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("non-finite"),
+        "{skipped:?}"
+    );
+
+    let markdown = Command::new(env!("CARGO_BIN_EXE_pcsimplify"))
+        .args(["bench", d, "--methods", "fps", "--ratios", "0.5"])
+        .output()
+        .expect("the binary runs");
+    let text = String::from_utf8_lossy(&markdown.stdout);
+    assert!(text.contains("- b_text.obj: "), "{text}");
+
+    std::fs::remove_file(dir.path().join("a_good.xyz")).unwrap();
+    let message = refused(&["bench", d, "--methods", "fps"]);
+    assert!(message.contains("no file in"), "{message}");
+    assert!(
+        message.contains("2 skipped; first: b_text.obj"),
+        "{message}"
+    );
+}

@@ -146,8 +146,8 @@ fn hands(
         ..Default::default()
     };
     cfg.validate()?;
-    create_dir(output)?;
     let template = HandTemplate::new(subdivisions)?;
+    create_dir(output)?;
     let rest = template.generate(&HandShape::adult(), &HandPose::rest())?;
     write_mesh(output.join("template.ply"), &rest)?;
     let bar = progress(count, "hands");
@@ -449,8 +449,17 @@ fn shapes(
     preview(preview_path, &previews, View::default())
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+fn main() -> std::process::ExitCode {
+    match run(&Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("synth: {error:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: &Cli) -> Result<()> {
     meshgnn_geometry::remove_temporaries_on_interrupt()
         .context("installing the interrupt handler")?;
     let start = Instant::now();

@@ -71,3 +71,58 @@ fn hands_faces_and_shapes_write_reloadable_datasets() {
     assert!(ds.template().is_none());
     assert_eq!(ds.load_split("test").unwrap().len(), 2);
 }
+
+/// Every count is checked before anything is generated: one line naming the flag and its
+/// range, a non-zero exit, and no output folder created.
+#[test]
+fn counts_out_of_range_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, expected) in [
+        (
+            &["hands", "-n", "0"][..],
+            "invalid -n: 0 is outside 1..=100000",
+        ),
+        (
+            &["hands", "-n", "100001"][..],
+            "invalid -n: 100001 is outside 1..=100000",
+        ),
+        (&["hands", "--subdivisions", "9"][..], "subdivisions"),
+        (
+            &["faces", "-n", "10001"][..],
+            "invalid -n: 10001 is outside 1..=10000",
+        ),
+        (
+            &["faces", "--frame-step", "0"][..],
+            "invalid --frame-step: 0",
+        ),
+        (
+            &["shapes", "--per-family", "1001"][..],
+            "invalid --per-family: 1001",
+        ),
+        (
+            &["shapes", "--resolution", "4"][..],
+            "invalid --resolution: 4 is outside 8..=512",
+        ),
+        (
+            &["shapes", "--resolution", "100000"][..],
+            "invalid --resolution: 100000",
+        ),
+        (
+            &["shapes", "--lidar", "101"][..],
+            "invalid --lidar: 101 is outside 0..=100",
+        ),
+    ] {
+        let output = dir.path().join("out");
+        let out = Command::new(env!("CARGO_BIN_EXE_synth"))
+            .args(args)
+            .arg("-o")
+            .arg(&output)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!output.exists(), "{args:?} wrote {}", output.display());
+    }
+}

@@ -24,8 +24,9 @@
 //! refusal is one line naming the glTF file, the buffer and its URI. Memory is therefore
 //! bounded by the glTF file plus the files it names in its own folder.
 //!
-//! Not covered: a local attacker who swaps a checked file for a FIFO between the check and
-//! the open (the opened handle is re-checked, but the open itself could block).
+//! A file swapped for a FIFO or a symbolic link between the check and the open cannot block or
+//! redirect the read: the open is non-blocking and does not follow a link in the last
+//! component, and the opened handle is checked again.
 
 use super::format_error::format_error;
 use super::uri_decoding::{base64_decode, base64_decoded_bound, percent_decode};
@@ -317,10 +318,25 @@ fn check_regular(metadata: &std::fs::Metadata, length: usize) -> std::result::Re
     Ok(())
 }
 
+/// Opens the checked file at `path` so that a file swapped in since the check cannot block or
+/// redirect the open: non-blocking (a FIFO opens at once and is then refused by the handle's
+/// re-check) and not through a symbolic link in the last component (the checked path is
+/// canonical, so a link there was put in after the check).
+fn open_checked(path: &Path) -> std::io::Result<std::fs::File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW);
+    }
+    options.open(path)
+}
+
 /// Reads the first `needed` bytes of the regular file at `path`, re-checking the opened
 /// handle (the file may have changed since it was checked) and never reading more.
 fn read_bounded(path: &Path, needed: usize) -> std::result::Result<Vec<u8>, String> {
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let file = open_checked(path).map_err(|e| e.to_string())?;
     let metadata = file.metadata().map_err(|e| e.to_string())?;
     check_regular(&metadata, needed)?;
     let mut bytes = Vec::with_capacity(needed);
@@ -334,4 +350,41 @@ fn read_bounded(path: &Path, needed: usize) -> std::result::Result<Vec<u8>, Stri
         ));
     }
     Ok(bytes)
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+    use std::time::Duration;
+
+    /// The read after the check, on files swapped in since: a FIFO neither blocks nor is read,
+    /// a symbolic link (here to a valid file) is not followed.
+    #[test]
+    fn a_file_swapped_after_the_check_is_refused_without_blocking() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("swapped.bin");
+        match std::process::Command::new("mkfifo").arg(&fifo).status() {
+            Ok(status) if status.success() => {}
+            other => {
+                eprintln!("skipped: mkfifo unavailable ({other:?})");
+                return;
+            }
+        }
+        let (send, receive) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = send.send(read_bounded(&fifo, 4));
+        });
+        let result = receive
+            .recv_timeout(Duration::from_secs(30))
+            .expect("opening a FIFO swapped in after the check blocked");
+        assert!(result.unwrap_err().contains("not a regular file"));
+
+        let real = dir.path().join("real.bin");
+        std::fs::write(&real, [1u8; 8]).unwrap();
+        let link = dir.path().join("link.bin");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        assert_eq!(read_bounded(&real, 8).unwrap(), [1u8; 8]);
+        assert!(read_bounded(&link, 8).is_err());
+    }
 }

@@ -8,6 +8,7 @@ mod segment_triangle;
 mod segments_cross;
 mod triangle_lattice;
 mod triangles_intersect;
+mod triangles_meet;
 mod triangles_overlap;
 
 pub use edge_crossing_count::edge_crossing_count;
@@ -18,6 +19,7 @@ pub use segments_cross::segments_cross;
 pub(crate) use triangle_lattice::barycentric_point;
 pub use triangle_lattice::triangle_lattice;
 pub use triangles_intersect::triangles_intersect;
+pub use triangles_meet::triangles_meet;
 pub use triangles_overlap::triangles_overlap;
 
 #[cfg(test)]

@@ -74,7 +74,7 @@ impl PointSimplifier {
                 reason: format!("must be in 1..={n} for {n} points, got {target}"),
             });
         }
-        if let Some(i) = points.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        if let Some(i) = meshgnn_geometry::vec3::first_non_finite(points) {
             return Err(Error::Invalid {
                 what: format!("point {i}"),
                 reason: "has a non-finite coordinate".into(),

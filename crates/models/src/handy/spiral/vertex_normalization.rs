@@ -137,7 +137,7 @@ pub(crate) fn check_meshes(
                 reason: format!("has {} vertices, expected {v}", mesh.len()),
             });
         }
-        if let Some(i) = mesh.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        if let Some(i) = meshgnn_geometry::vec3::first_non_finite(mesh) {
             return Err(Error::Invalid {
                 what: format!("{what}: mesh {s}, vertex {i}"),
                 reason: format!("non-finite coordinate {:?}", mesh[i]),
