@@ -18,6 +18,7 @@ write("ident200k.xyz", ("0.125 -0.5 0.75\n" for _ in range(200_000)))
 write("ident100k.xyz", ("0.125 -0.5 0.75\n" for _ in range(100_000)))
 write("line200k.xyz", (f"{i} {2 * i} 0\n" for i in range(200_000)))
 write("ident3m.obj", ("v 0.125 -0.5 0.75\n" for _ in range(3_000_000)))
+write("rand3m.obj", (f"v {random.random():.6f} {random.random():.6f} {random.random():.6f}\n" for _ in range(3_000_000)))
 write("ident1500k.obj", ("v 0.125 -0.5 0.75\n" for _ in range(1_500_000)))
 PY
 run() {
@@ -35,6 +36,7 @@ run ident_neural   "$bin" simplify "$d/ident200k.xyz" -o "$d/out/ident_neural.xy
 run ident_fps      "$bin" simplify "$d/ident200k.xyz" -o "$d/out/ident_fps.xyz" --ratio 0.5 --method fps
 run line_eval      "$bin" eval "$d/line200k.xyz" "$d/line200k.xyz"
 run line_neural    "$bin" simplify "$d/line200k.xyz" -o "$d/out/line_neural.xyz" --ratio 0.5 --method neural
+run rand3m_neural  "$bin" simplify "$d/rand3m.obj" -o "$d/out/rand3m_neural.xyz" --ratio 0.5 --method neural
 run ident3m_neural "$bin" simplify "$d/ident3m.obj" -o "$d/out/ident3m_neural.xyz" --ratio 0.5 --method neural
 run ident3m_fps    "$bin" simplify "$d/ident3m.obj" -o "$d/out/ident3m_fps.xyz" --ratio 0.5 --method fps
 run ident3m_eval   "$bin" eval "$d/ident3m.obj" "$d/ident1500k.obj"

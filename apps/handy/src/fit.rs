@@ -5,9 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use meshgnn_geometry::{
-    OutputGuard, TriMesh, check_count, check_input_points, read_point_cloud, write_mesh,
-};
+use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_input_point_cloud, write_mesh};
 use meshgnn_models::{ChamferDirection, MAX_FIT_STEPS, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;
 
@@ -55,8 +53,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
         "Adam steps of the fit",
     )?;
     let loaded = load_model(args.model.as_deref())?;
-    let scan = read_point_cloud(&args.scan)
-        .and_then(|scan| check_input_points(&args.scan, scan.points()).map(|()| scan))
+    let scan = read_input_point_cloud(&args.scan)
         .with_context(|| format!("reading {}", args.scan.display()))?;
     let options = ScanFitOptions {
         steps: args.steps,

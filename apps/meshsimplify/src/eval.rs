@@ -12,7 +12,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use meshgnn_geometry::{InputUse, check_count, check_input_mesh, read_mesh};
+use meshgnn_geometry::{InputUse, check_count, read_input_mesh};
 use meshgnn_losses::metrics::{
     MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation,
 };
@@ -46,9 +46,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "surface samples per mesh",
     )?;
     let read = |path: &PathBuf, role: &str| {
-        read_mesh(path)
-            .and_then(|mesh| check_input_mesh(path, &mesh, InputUse::Surface).map(|()| mesh))
-            .with_context(|| format!("reading the {role} mesh"))
+        read_input_mesh(path, InputUse::Surface).with_context(|| format!("reading the {role} mesh"))
     };
     let original = read(&args.original, "original")?;
     let simplified = read(&args.simplified, "simplified")?;

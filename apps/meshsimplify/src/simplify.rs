@@ -15,9 +15,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use meshgnn_geometry::{
-    InputUse, MeshFormat, OutputGuard, check_input_mesh, read_mesh, write_mesh,
-};
+use meshgnn_geometry::{InputUse, MeshFormat, OutputGuard, read_input_mesh, write_mesh};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
 use serde_json::json;
 
@@ -79,8 +77,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     OutputGuard::new(guarded)
         .overridable_by("--force")
         .check(&args.output)?;
-    let mesh = read_mesh(&args.input)?;
-    check_input_mesh(&args.input, &mesh, InputUse::Surface)?;
+    let mesh = read_input_mesh(&args.input, InputUse::Surface)?;
     check_target(&target, mesh.face_count())
         .with_context(|| format!("simplifying {}", args.input.display()))?;
 

@@ -11,7 +11,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use meshgnn_geometry::{check_count, check_input_points, read_point_cloud};
+use meshgnn_geometry::{check_count, read_input_point_cloud};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation,
     point_cloud_evaluation,
@@ -42,9 +42,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "curvature neighbours per point",
     )?;
     let read = |path: &PathBuf, role: &str| {
-        read_point_cloud(path)
-            .and_then(|cloud| check_input_points(path, cloud.points()).map(|()| cloud))
-            .with_context(|| format!("reading the {role} cloud"))
+        read_input_point_cloud(path).with_context(|| format!("reading the {role} cloud"))
     };
     let original = read(&args.original, "original")?;
     let simplified = read(&args.simplified, "simplified")?;

@@ -3,16 +3,33 @@
 //! surface) faces of positive area.
 //!
 //! Readers accept every well-formed file, and a well-formed file can be empty: an empty
-//! `.obj`, or text with no `v` record, parses as a mesh of zero vertices. Every command calls
-//! [`check_input_mesh`] (or [`check_input_points`]) right after reading, so such a file is a
+//! `.obj`, or text with no `v` record, parses as a mesh of zero vertices. Every command reads
+//! through [`read_input_mesh`] or [`read_input_point_cloud`] (or calls [`check_input_points`]
+//! right after reading a mesh-or-cloud), so such a file is a
 //! one-line error naming it and the problem, never a silent "vertices 0" or an error deep in
 //! a solver that names the wrong input.
 
 use std::path::Path;
 
-use crate::TriMesh;
 use crate::error::{Error, Result};
 use crate::face_normals::face_areas;
+use crate::{PointCloud, TriMesh, read_mesh, read_point_cloud};
+
+/// Reads the mesh at `path` and checks that it holds what `usage` needs
+/// ([`check_input_mesh`]): what every command that takes a mesh file calls.
+pub fn read_input_mesh(path: &Path, usage: InputUse) -> Result<TriMesh> {
+    let mesh = read_mesh(path)?;
+    check_input_mesh(path, &mesh, usage)?;
+    Ok(mesh)
+}
+
+/// Reads the point cloud at `path` (a mesh file's vertices) and checks it
+/// ([`check_input_points`]): what every command that takes a cloud file calls.
+pub fn read_input_point_cloud(path: &Path) -> Result<PointCloud> {
+    let cloud = read_point_cloud(path)?;
+    check_input_points(path, cloud.points())?;
+    Ok(cloud)
+}
 
 /// Largest coordinate magnitude accepted from a file. Positions are `f32` and the spatial
 /// index, normals and curvature square coordinate differences in `f32`: with `|x| ≤ 1e18` a

@@ -72,7 +72,10 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
-pub use input_content::{InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points};
+pub use input_content::{
+    InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points, read_input_mesh,
+    read_input_point_cloud,
+};
 pub use laplacian_eigenvectors::{LaplacianEigenpairs, laplacian_eigenvectors};
 pub use manifold::{is_edge_manifold, is_vertex_manifold, non_manifold_vertices};
 pub use mass_matrix::lumped_mass_matrix;

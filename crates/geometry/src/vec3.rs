@@ -22,6 +22,14 @@ pub fn to_f64(p: [f32; 3]) -> [f64; 3] {
     [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
 }
 
+/// `|a − b|²` of two `f32` points, accumulated in `f64` (exact for the metrics; the spatial
+/// index's own [`crate::squared_distance`] stays in `f32`, its one evaluation order).
+#[inline]
+pub fn squared_distance_f64(a: &[f32; 3], b: &[f32; 3]) -> f64 {
+    let d = sub(to_f64(*a), to_f64(*b));
+    dot(d, d)
+}
+
 /// `a − b`.
 #[inline]
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

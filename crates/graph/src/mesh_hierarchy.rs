@@ -18,19 +18,32 @@ pub struct HierarchyOptions {
     /// Reduction factor of the face (≈ vertex) count from each level to the next; one entry
     /// per pooling step. Default `[4, 4, 4, 4]` (COMA; the thesis uses ~5).
     pub factors: Vec<f64>,
-    /// Spiral length per level (`factors.len() + 1` entries), or empty for no spirals.
-    /// Default 9 (Neural3DMM).
+    /// Spiral length of each level: one value for every level, one per level
+    /// (`factors.len() + 1` entries), or empty for no spirals. Default `[9]` (Neural3DMM), so
+    /// the default follows any number of factors.
     pub spiral_lengths: Vec<usize>,
-    /// Spiral dilation per level (same length as `spiral_lengths`). Default 1.
+    /// Spiral dilation of each level: one value for every level or one per level. Default
+    /// `[1]`.
     pub dilations: Vec<usize>,
+}
+
+impl HierarchyOptions {
+    /// The spiral length and dilation of `level`, or `None` when no spirals are asked for.
+    pub fn spiral_of_level(&self, level: usize) -> Option<(usize, usize)> {
+        let at = |values: &[usize]| match values {
+            [one] => Some(*one),
+            many => many.get(level).copied(),
+        };
+        Some((at(&self.spiral_lengths)?, at(&self.dilations)?))
+    }
 }
 
 impl Default for HierarchyOptions {
     fn default() -> Self {
         Self {
             factors: vec![4.0; 4],
-            spiral_lengths: vec![9; 5],
-            dilations: vec![1; 5],
+            spiral_lengths: vec![9],
+            dilations: vec![1],
         }
     }
 }
@@ -93,8 +106,11 @@ pub fn build_hierarchy(template: &TriMesh, options: &HierarchyOptions) -> Result
     }
     let spirals = levels
         .iter()
-        .zip(options.spiral_lengths.iter().zip(&options.dilations))
-        .map(|(mesh, (&length, &dilation))| spiral_sequences(mesh, length, dilation))
+        .enumerate()
+        .filter_map(|(level, mesh)| {
+            let (length, dilation) = options.spiral_of_level(level)?;
+            Some(spiral_sequences(mesh, length, dilation))
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(MeshHierarchy {
         levels,
@@ -116,17 +132,20 @@ fn validate(template: &TriMesh, options: &HierarchyOptions) -> Result<()> {
         });
     }
     let levels = options.factors.len() + 1;
-    if !options.spiral_lengths.is_empty() && options.spiral_lengths.len() != levels {
+    if !matches!(options.spiral_lengths.len(), 0 | 1) && options.spiral_lengths.len() != levels {
         return Err(Error::ShapeMismatch {
-            what: "spiral lengths (one per level, or none)",
+            what: "spiral lengths (one for every level, one per level, or none)",
             expected: levels,
             actual: options.spiral_lengths.len(),
         });
     }
-    if options.dilations.len() != options.spiral_lengths.len() {
+    if !options.spiral_lengths.is_empty()
+        && options.dilations.len() != 1
+        && options.dilations.len() != levels
+    {
         return Err(Error::ShapeMismatch {
-            what: "dilations (one per spiral length)",
-            expected: options.spiral_lengths.len(),
+            what: "dilations (one for every level, or one per level)",
+            expected: levels,
             actual: options.dilations.len(),
         });
     }
@@ -181,6 +200,52 @@ mod tests {
             spiral_lengths: vec![9, 9],
             dilations: vec![1, 1],
         }
+    }
+
+    #[test]
+    fn defaults_follow_the_number_of_factors() {
+        let template = icosphere(4);
+        for count in [1, 2, 3] {
+            let options = HierarchyOptions {
+                factors: vec![4.0; count],
+                ..Default::default()
+            };
+            let h = build_hierarchy(&template, &options).unwrap();
+            assert_eq!((h.levels.len(), h.spirals.len()), (count + 1, count + 1));
+            assert!(h.spirals.iter().all(|s| s.row(0).len() == 9));
+        }
+        // One entry per level still works; a count that fits neither is refused.
+        let per_level = HierarchyOptions {
+            factors: vec![4.0, 4.0],
+            spiral_lengths: vec![9, 7, 5],
+            dilations: vec![1, 1, 2],
+        };
+        let h = build_hierarchy(&template, &per_level).unwrap();
+        let lengths: Vec<usize> = h.spirals.iter().map(|s| s.row(0).len()).collect();
+        assert_eq!(lengths, [9, 7, 5]);
+        let wrong = HierarchyOptions {
+            spiral_lengths: vec![9, 9],
+            ..per_level
+        };
+        assert!(matches!(
+            build_hierarchy(&template, &wrong),
+            Err(Error::ShapeMismatch {
+                expected: 3,
+                actual: 2,
+                ..
+            })
+        ));
+        let none = HierarchyOptions {
+            factors: vec![4.0],
+            spiral_lengths: vec![],
+            dilations: vec![],
+        };
+        assert!(
+            build_hierarchy(&template, &none)
+                .unwrap()
+                .spirals
+                .is_empty()
+        );
     }
 
     #[test]

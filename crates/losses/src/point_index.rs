@@ -8,20 +8,13 @@
 //! coordinates, so they are exact for the returned neighbour.
 
 use meshgnn_geometry::SpatialIndex;
+use meshgnn_geometry::vec3::squared_distance_f64;
 use rayon::prelude::*;
 
 /// The index over `points: #P×3`, answering nearest and k-nearest queries.
 pub(crate) struct PointIndex<'a> {
     points: &'a [[f32; 3]],
     index: SpatialIndex,
-}
-
-/// Squared Euclidean distance of two points, accumulated in `f64`.
-pub(crate) fn squared_distance(a: &[f32; 3], b: &[f32; 3]) -> f64 {
-    let dx = f64::from(a[0]) - f64::from(b[0]);
-    let dy = f64::from(a[1]) - f64::from(b[1]);
-    let dz = f64::from(a[2]) - f64::from(b[2]);
-    dx * dx + dy * dy + dz * dz
 }
 
 impl<'a> PointIndex<'a> {
@@ -64,7 +57,7 @@ impl<'a> PointIndex<'a> {
                 let index = j as usize;
                 self.points
                     .get(index)
-                    .map(|p| (index, squared_distance(p, query)))
+                    .map(|p| (index, squared_distance_f64(p, query)))
             })
             .collect();
         found.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));

@@ -83,7 +83,7 @@ pub fn chamfer_distance(a: &[[f32; 3]], b: &[[f32; 3]]) -> Result<ChamferDistanc
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::point_index::squared_distance;
+    use meshgnn_geometry::vec3::squared_distance_f64;
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     fn random_points(n: usize, seed: u64) -> Vec<[f32; 3]> {
@@ -97,7 +97,7 @@ mod tests {
         a.iter()
             .map(|x| {
                 b.iter()
-                    .map(|y| squared_distance(x, y))
+                    .map(|y| squared_distance_f64(x, y))
                     .fold(f64::INFINITY, f64::min)
             })
             .sum()

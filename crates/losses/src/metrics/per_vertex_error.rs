@@ -3,8 +3,8 @@
 
 use crate::Result;
 use crate::deterministic_sum::deterministic_sum;
-use crate::point_index::squared_distance;
 use crate::validate::{check_len, check_points};
+use meshgnn_geometry::vec3::squared_distance_f64;
 
 /// Mean over vertices of ‖a_v − b_v‖ for `a, b: #V×3` in correspondence (same units as the
 /// input, e.g. mm for Table 3.2). Accumulated in `f64`, parallel and order-deterministic.
@@ -23,7 +23,7 @@ pub fn per_vertex_error(a: &[[f32; 3]], b: &[[f32; 3]]) -> Result<f64> {
     check_points("target vertices", b)?;
     check_len("target vertices", a.len(), b.len())?;
     let total = deterministic_sum(a.len(), |i| match (a.get(i), b.get(i)) {
-        (Some(p), Some(q)) => squared_distance(p, q).sqrt(),
+        (Some(p), Some(q)) => squared_distance_f64(p, q).sqrt(),
         _ => 0.0,
     });
     Ok(total / a.len() as f64)

@@ -27,6 +27,19 @@ use crate::{Error, Result};
 /// Centres per chunk (`8192 × 15 × 64` floats ≈ 31 MB of gathered features).
 const CHUNK: usize = 8192;
 
+/// Widths of the layer's parts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AttentionRefinementConfig {
+    /// Width C of the embeddings it reads.
+    pub channels: usize,
+    /// Width d of the query/key projections.
+    pub attention_dim: usize,
+    /// Hidden units h of φ.
+    pub phi_hidden: usize,
+    /// Hidden units g of γ.
+    pub gamma_hidden: usize,
+}
+
 /// The learnable parts of eq. 5.5; parameter names `query`, `key`, `phi.{0,1}`,
 /// `gamma.{0,1}`.
 #[derive(Clone, Debug)]
@@ -39,29 +52,31 @@ pub struct AttentionRefinement {
 }
 
 impl AttentionRefinement {
-    /// A layer over `channels`-wide embeddings with attention width `attention_dim` (d),
-    /// `phi_hidden` (h) and `gamma_hidden` (g) units.
+    /// A layer with the widths of `config`.
     ///
     /// ```
     /// use candle_core::{DType, Device, Tensor};
     /// use candle_nn::{VarBuilder, VarMap};
-    /// use meshgnn_models::point_simplifier::{AttentionRefinement, refinement_graph};
+    /// use meshgnn_models::point_simplifier::{
+    ///     AttentionRefinement, AttentionRefinementConfig, refinement_graph,
+    /// };
     /// let map = VarMap::new();
     /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
-    /// let att = AttentionRefinement::new(vb, 8, 4, 6, 5)?;
+    /// let cfg = AttentionRefinementConfig { channels: 8, attention_dim: 4, phi_hidden: 6, gamma_hidden: 5 };
+    /// let att = AttentionRefinement::new(vb, &cfg)?;
     /// let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     /// let g = refinement_graph(&pts, &[0, 2], 3, &Device::Cpu)?;
     /// let f = Tensor::ones((3, 8), DType::F32, &Device::Cpu)?;
     /// assert_eq!(att.forward(&f, &g)?.dims(), &[2, 3]);
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
-    pub fn new(
-        vb: VarBuilder,
-        channels: usize,
-        attention_dim: usize,
-        phi_hidden: usize,
-        gamma_hidden: usize,
-    ) -> Result<Self> {
+    pub fn new(vb: VarBuilder, config: &AttentionRefinementConfig) -> Result<Self> {
+        let AttentionRefinementConfig {
+            channels,
+            attention_dim,
+            phi_hidden,
+            gamma_hidden,
+        } = *config;
         Ok(Self {
             query: candle_nn::linear(channels, attention_dim, vb.pp("query"))?,
             key: candle_nn::linear(channels, attention_dim, vb.pp("key"))?,
@@ -284,7 +299,13 @@ mod tests {
         let dev = Device::Cpu;
         let map = candle_nn::VarMap::new();
         let vb = VarBuilder::from_varmap(&map, DType::F32, &dev);
-        let random = AttentionRefinement::new(vb, 4, 3, 5, 6).unwrap();
+        let cfg = AttentionRefinementConfig {
+            channels: 4,
+            attention_dim: 3,
+            phi_hidden: 5,
+            gamma_hidden: 6,
+        };
+        let random = AttentionRefinement::new(vb, &cfg).unwrap();
         let zero_phi1 = Linear::new(
             Tensor::zeros((3, 5), DType::F32, &dev).unwrap(),
             Some(Tensor::zeros(3, DType::F32, &dev).unwrap()),

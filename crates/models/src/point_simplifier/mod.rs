@@ -16,7 +16,7 @@ mod simplifier_loss;
 mod simplifier_training;
 mod simplify;
 
-pub use attention_refinement::AttentionRefinement;
+pub use attention_refinement::{AttentionRefinement, AttentionRefinementConfig};
 pub use checkpoint::POINT_SIMPLIFIER_NAME;
 pub use latent_sampling::{LatentSamplingOptions, latent_farthest_point_sampling};
 pub use mean_aggregation_gnn::MeanAggregationGnn;

@@ -19,8 +19,9 @@ use candle_nn::VarBuilder;
 
 use super::fused_projector::FusedProjector;
 use super::{
-    AttentionRefinement, LatentSamplingOptions, MeanAggregationGnn, NeighbourIndex, PointMlp,
-    latent_farthest_point_sampling, refinement_graph, refinement_graph_indexed,
+    AttentionRefinement, AttentionRefinementConfig, LatentSamplingOptions, MeanAggregationGnn,
+    NeighbourIndex, PointMlp, latent_farthest_point_sampling, refinement_graph,
+    refinement_graph_indexed,
 };
 use crate::{Error, Result};
 
@@ -157,10 +158,12 @@ impl PointSimplifier {
         let gnn = MeanAggregationGnn::new(pv.pp("gnn"), c.hidden, c.hidden)?;
         let refine = AttentionRefinement::new(
             vb.pp("refine"),
-            c.hidden,
-            c.attention_dim,
-            c.phi_hidden,
-            c.gamma_hidden,
+            &AttentionRefinementConfig {
+                channels: c.hidden,
+                attention_dim: c.attention_dim,
+                phi_hidden: c.phi_hidden,
+                gamma_hidden: c.gamma_hidden,
+            },
         )?;
         Ok(Self {
             config: c,
