@@ -19,6 +19,7 @@ mod error;
 mod tensor_file;
 
 pub mod handy;
+pub mod mesh_simplifier;
 pub mod point_selection;
 pub mod point_simplifier;
 pub mod pretrained;

@@ -1,0 +1,238 @@
+//! DevConv, the graph layer of the neural mesh simplifier (thesis eq. 6.1, ch. 6.3.1):
+//! `f_i = σ(W_φ max_{j∈N(i)} W_θ(x_i − x_j))`, the maximum taken per channel. It encodes how far
+//! a point deviates from its neighbourhood: sharp and rough regions get larger values than
+//! smooth ones, and the maximum of relative features singles out outliers (the thesis'
+//! argument for its robustness to noise). σ is ReLU (ch. 6.4).
+//!
+//! `W_θ` has no bias: in `W_θ(x_i − x_j) + b` the bias would only shift the maximum by a
+//! constant that `W_φ`'s bias already absorbs. Because only differences enter, the layer is
+//! invariant to a translation of its input (tested).
+
+use candle_core::{D, Tensor};
+use candle_nn::{Linear, Module, VarBuilder};
+
+use super::NeighbourSlots;
+use crate::{Error, Result};
+
+/// The projection an empty neighbour slot reads ([`NeighbourSlots`]): far above any real one,
+/// and finite in `f32` after a subtraction.
+const EMPTY_SLOT_VALUE: f32 = 1e30;
+
+/// Widths of a DevConv layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DevConvConfig {
+    /// Input channels (3 for coordinates).
+    pub input: usize,
+    /// Output channels (64 in the thesis).
+    pub output: usize,
+}
+
+/// Eq. 6.1 with learnable `W_θ` (`theta.weight (C_out, C_in)`, no bias) and `W_φ`
+/// (`phi.weight (C_out, C_out)`, `phi.bias`).
+#[derive(Clone, Debug)]
+pub struct DevConv {
+    theta: Linear,
+    phi: Linear,
+}
+
+impl DevConv {
+    /// A layer with the widths of `config`, parameters under `vb`.
+    ///
+    /// ```
+    /// use candle_core::{DType, Device, Tensor};
+    /// use candle_nn::{VarBuilder, VarMap};
+    /// use meshgnn_models::mesh_simplifier::{DevConv, DevConvConfig, NeighbourSlots};
+    /// let map = VarMap::new();
+    /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
+    /// let conv = DevConv::new(vb, &DevConvConfig { input: 3, output: 8 })?;
+    /// let slots = NeighbourSlots::from_rows(&[vec![1], vec![0]], &Device::Cpu)?;
+    /// let x = Tensor::new(&[[0f32, 0.0, 0.0], [1.0, 0.0, 0.0]], &Device::Cpu)?;
+    /// assert_eq!(conv.forward(&x, &slots)?.dims(), &[2, 8]);
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn new(vb: VarBuilder, config: &DevConvConfig) -> Result<Self> {
+        if config.input == 0 || config.output == 0 {
+            return Err(Error::Invalid {
+                what: "DevConv widths".into(),
+                reason: format!("{config:?}: both must be at least 1"),
+            });
+        }
+        Ok(Self {
+            theta: candle_nn::linear_no_bias(config.input, config.output, vb.pp("theta"))?,
+            phi: candle_nn::linear(config.output, config.output, vb.pp("phi"))?,
+        })
+    }
+
+    /// From raw parts (tests, hand-set weights).
+    pub fn from_parts(theta: Linear, phi: Linear) -> Self {
+        Self { theta, phi }
+    }
+
+    /// Eq. 6.1: `features: (N, C_in)` over the points of `slots` → `(N, C_out)`.
+    pub fn forward(&self, features: &Tensor, slots: &NeighbourSlots) -> Result<Tensor> {
+        let (n, _) = features.dims2()?;
+        if n != slots.len() {
+            return Err(Error::Invalid {
+                what: "DevConv features".into(),
+                reason: format!("{n} rows for a graph over {} points", slots.len()),
+            });
+        }
+        // W_θ(x_i − x_j) = W_θ x_i − W_θ x_j: project once, then gather the projections.
+        let projected = self.theta.forward(features)?;
+        let channels = projected.dim(1)?;
+        // Empty slots read a row so large that `x_i − x_empty` is never the maximum.
+        let empty = Tensor::full(EMPTY_SLOT_VALUE, (1, channels), features.device())?
+            .to_dtype(projected.dtype())?;
+        let neighbours = Tensor::cat(&[&projected, &empty], 0)?
+            .index_select(slots.indices(), 0)?
+            .reshape((n, slots.width(), channels))?;
+        let deviation = projected.unsqueeze(1)?.broadcast_sub(&neighbours)?;
+        let largest = deviation.max(D::Minus2)?;
+        Ok(self.phi.forward(&largest)?.relu()?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use candle_core::{DType, Device, Var};
+    use candle_nn::VarMap;
+
+    fn identity_layer(bias: f32) -> DevConv {
+        let eye = Tensor::eye(3, DType::F32, &Device::Cpu).unwrap();
+        let b = Tensor::full(bias, 3, &Device::Cpu).unwrap();
+        DevConv::from_parts(Linear::new(eye.clone(), None), Linear::new(eye, Some(b)))
+    }
+
+    #[test]
+    fn identity_weights_give_the_largest_coordinate_deviation() {
+        // f_i = ReLU(max_j (x_i − x_j)) per coordinate.
+        let x = [[0f32, 0.0, 0.0], [1.0, -2.0, 0.5], [-1.0, 3.0, 0.0]];
+        let rows = [vec![1, 2], vec![0], vec![0, 1]];
+        let slots = NeighbourSlots::from_rows(&rows, &Device::Cpu).unwrap();
+        let input = Tensor::new(&x, &Device::Cpu).unwrap();
+        let got: Vec<Vec<f32>> = identity_layer(0.0)
+            .forward(&input, &slots)
+            .unwrap()
+            .to_vec2()
+            .unwrap();
+        let expected = |i: usize| -> Vec<f32> {
+            (0..3)
+                .map(|c| {
+                    rows[i]
+                        .iter()
+                        .map(|&j| x[i][c] - x[j as usize][c])
+                        .fold(f32::NEG_INFINITY, f32::max)
+                        .max(0.0)
+                })
+                .collect()
+        };
+        for (i, row) in got.iter().enumerate() {
+            assert_eq!(row, &expected(i), "point {i}");
+        }
+        // Point 1 has one neighbour, padded by repetition: its maximum is that neighbour's.
+        assert_eq!(got[1], vec![1.0, 0.0, 0.5]);
+    }
+
+    #[test]
+    fn isolated_points_see_zero_deviation_and_the_bias() {
+        let slots = NeighbourSlots::from_rows(&[vec![], vec![]], &Device::Cpu).unwrap();
+        let x = Tensor::new(&[[5f32, 1.0, 2.0], [0.0, 0.0, 9.0]], &Device::Cpu).unwrap();
+        let got: Vec<Vec<f32>> = identity_layer(0.25)
+            .forward(&x, &slots)
+            .unwrap()
+            .to_vec2()
+            .unwrap();
+        assert_eq!(got, vec![vec![0.25; 3], vec![0.25; 3]]);
+    }
+
+    #[test]
+    fn translation_and_neighbour_order_do_not_change_the_output() {
+        let map = VarMap::new();
+        let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
+        let conv = DevConv::new(
+            vb,
+            &DevConvConfig {
+                input: 3,
+                output: 16,
+            },
+        )
+        .unwrap();
+        let mesh = meshgnn_geometry::icosphere(2);
+        let adjacency = meshgnn_graph::vertex_adjacency(&mesh).unwrap();
+        let slots = NeighbourSlots::from_adjacency(&adjacency, &Device::Cpu).unwrap();
+        let reversed: Vec<Vec<u32>> = (0..adjacency.rows())
+            .map(|i| adjacency.row(i).0.iter().rev().copied().collect())
+            .collect();
+        let reversed = NeighbourSlots::from_rows(&reversed, &Device::Cpu).unwrap();
+        let v = mesh.vertices();
+        let x = Tensor::from_slice(v.as_flattened(), (v.len(), 3), &Device::Cpu).unwrap();
+        let shifted = x.broadcast_add(&Tensor::new(&[3f32, -1.0, 0.5], &Device::Cpu).unwrap());
+        let base: Vec<Vec<f32>> = conv.forward(&x, &slots).unwrap().to_vec2().unwrap();
+        for (input, graph) in [(&shifted.unwrap(), &slots), (&x, &reversed)] {
+            let other: Vec<Vec<f32>> = conv.forward(input, graph).unwrap().to_vec2().unwrap();
+            for (a, b) in base.iter().flatten().zip(other.iter().flatten()) {
+                assert!((a - b).abs() <= 1e-5 * (1.0 + a.abs()), "{a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let map = VarMap::new();
+        let vb = VarBuilder::from_varmap(&map, DType::F64, &Device::Cpu);
+        let conv = DevConv::new(
+            vb,
+            &DevConvConfig {
+                input: 3,
+                output: 5,
+            },
+        )
+        .unwrap();
+        let rows = [vec![1, 2, 3], vec![0, 2], vec![3], vec![0, 1, 2]];
+        let slots = NeighbourSlots::from_rows(&rows, &Device::Cpu).unwrap();
+        let x0 = [
+            0.1, -0.3, 0.7, 0.9, 0.2, -0.4, -0.6, 0.5, 0.3, 0.25, -0.8, 0.45,
+        ];
+        let loss = |values: &[f64]| -> f64 {
+            let x = Tensor::from_slice(values, (4, 3), &Device::Cpu).unwrap();
+            let y = conv.forward(&x, &slots).unwrap();
+            // a weighted sum, so that every channel's gradient matters differently
+            let w = Tensor::arange(1f64, 21.0, &Device::Cpu)
+                .unwrap()
+                .reshape((4, 5))
+                .unwrap();
+            (y * w).unwrap().sum_all().unwrap().to_scalar().unwrap()
+        };
+        let var = Var::from_slice(&x0, (4, 3), &Device::Cpu).unwrap();
+        let w = Tensor::arange(1f64, 21.0, &Device::Cpu)
+            .unwrap()
+            .reshape((4, 5))
+            .unwrap();
+        let total = (conv.forward(var.as_tensor(), &slots).unwrap() * w)
+            .unwrap()
+            .sum_all()
+            .unwrap();
+        let grads = total.backward().unwrap();
+        let analytic: Vec<f64> = grads
+            .get(var.as_tensor())
+            .unwrap()
+            .flatten_all()
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        let h = 1e-6;
+        for k in 0..x0.len() {
+            let (mut up, mut down) = (x0, x0);
+            up[k] += h;
+            down[k] -= h;
+            let numeric = (loss(&up) - loss(&down)) / (2.0 * h);
+            assert!(
+                (numeric - analytic[k]).abs() <= 1e-5 * (1.0 + numeric.abs()),
+                "coordinate {k}: finite difference {numeric}, autograd {}",
+                analytic[k]
+            );
+        }
+        assert!(analytic.iter().any(|g| g.abs() > 1e-3), "{analytic:?}");
+    }
+}
