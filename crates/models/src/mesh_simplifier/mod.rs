@@ -1,11 +1,16 @@
 //! The neural mesh simplifier of thesis ch. 6 (a learnable point sampler, an edge predictor
 //! and a face classifier, trained end to end). This module holds the parts built so far: the
-//! DevConv layer (eq. 6.1) on fixed-width neighbour slots and the point sampler (ch. 6.3.1).
+//! DevConv layer (eq. 6.1) on fixed-width neighbour slots, the point sampler (ch. 6.3.1) and
+//! the edge predictor with its candidate triangles (ch. 6.3.2, eq. 6.2-6.5).
 
 mod dev_conv;
+mod edge_predictor;
+mod extended_graph;
 mod neighbour_slots;
 mod point_sampler;
 
 pub use dev_conv::{DevConv, DevConvConfig};
+pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePredictorConfig};
+pub use extended_graph::ExtendedGraph;
 pub use neighbour_slots::NeighbourSlots;
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};

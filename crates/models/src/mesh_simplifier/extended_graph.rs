@@ -1,0 +1,214 @@
+//! The graph the edge predictor works on (thesis ch. 6.3.2): the mesh adjacency extended by a
+//! k-NN graph over the sampled vertices (k = 15, ch. 6.4) so that no sampled vertex is
+//! isolated, and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) precomputed on the host,
+//! so the product itself is a gather, a multiply and a scatter-add that autograd follows.
+//!
+//! # Conventions
+//! - `A` in eq. 6.4 is the *extended* adjacency with self-loops (`A_ext + I`): with the
+//!   self-attention weight `S[i, i]` (each vertex attends to itself as well as to its
+//!   neighbours), two sampled vertices that share an edge or a k-NN link are connected in `A_s`
+//!   by the term `S[a, a] A[a, b] S[b, b]`. The thesis does not print the self-loops; without
+//!   them a sampled vertex would have no weight on itself in `Ŝ`.
+//! - Attention slots: row `i` lists `i` itself first, then its extended neighbours in
+//!   increasing order, padded with the empty slot `N` ([`NeighbourSlots`]).
+//! - `A_s` is stored as its non-zero pattern `pairs` (`(a, b)` in sampled-vertex numbering,
+//!   `a ≠ b`, sorted) and, per contributing term, the two attention entries it multiplies.
+
+use candle_core::{Device, Tensor};
+use meshgnn_geometry::SpatialIndex;
+use meshgnn_graph::CsrMatrix;
+use rayon::prelude::*;
+
+use super::NeighbourSlots;
+use crate::{Error, Result};
+
+/// The extended graph over `N` vertices with `M` of them sampled, and the structure of the
+/// eq. 6.4 product.
+#[derive(Clone, Debug)]
+pub struct ExtendedGraph {
+    /// DevConv neighbourhoods: the extended adjacency without self-loops.
+    pub(crate) conv_slots: NeighbourSlots,
+    /// Attention neighbourhoods: self first, then the extended neighbours.
+    pub(crate) attention_slots: NeighbourSlots,
+    /// `(N, W)`: 0 on a real attention slot, a large negative number on an empty one.
+    pub(crate) attention_mask: Tensor,
+    /// Non-zero pattern of `A_s`, `(a, b)` sorted, `a ≠ b`.
+    pairs: Vec<[u32; 2]>,
+    /// For every product term: the flat attention entries `i·W + s` of `Ŝ[i, a]` and `Ŝ[j, b]`.
+    term_left: Tensor,
+    term_right: Tensor,
+    /// For every product term: the index in `pairs` it adds to.
+    term_pair: Tensor,
+    sampled: Vec<u32>,
+}
+
+/// Logit added to empty attention slots: its softmax weight underflows to exactly 0.
+const EMPTY_SLOT_LOGIT: f32 = -1e30;
+
+impl ExtendedGraph {
+    /// The graph of `points: #N×3` with mesh `adjacency: #N×#N` (or an empty matrix for a
+    /// point cloud) extended by the `k` nearest sampled vertices of every sampled vertex
+    /// (`sampled`: distinct indices `< N`).
+    pub fn new(
+        points: &[[f32; 3]],
+        adjacency: &CsrMatrix,
+        sampled: &[u32],
+        k: usize,
+        device: &Device,
+    ) -> Result<Self> {
+        let n = points.len();
+        if adjacency.rows() != n || adjacency.cols() != n {
+            return Err(Error::Invalid {
+                what: "adjacency".into(),
+                reason: format!("{}×{} for {n} points", adjacency.rows(), adjacency.cols()),
+            });
+        }
+        let mut sample_position = vec![u32::MAX; n];
+        for (a, &i) in sampled.iter().enumerate() {
+            match sample_position.get_mut(i as usize) {
+                Some(slot) if *slot == u32::MAX => *slot = a as u32,
+                _ => {
+                    return Err(Error::Invalid {
+                        what: format!("sampled vertex {i}"),
+                        reason: format!("repeated or out of range for {n} points"),
+                    });
+                }
+            }
+        }
+        let mut rows: Vec<Vec<u32>> = (0..n)
+            .map(|i| {
+                let (columns, _) = adjacency.row(i);
+                columns
+                    .iter()
+                    .copied()
+                    .filter(|&j| j as usize != i)
+                    .collect()
+            })
+            .collect();
+        if sampled.len() >= 2 && k > 0 {
+            let sampled_points: Vec<[f32; 3]> =
+                sampled.iter().map(|&i| points[i as usize]).collect();
+            let knn = SpatialIndex::new(&sampled_points)?.knn_graph(k.min(sampled.len() - 1))?;
+            for (a, neighbours) in knn.indices.chunks(knn.k).enumerate() {
+                let i = sampled[a];
+                for &b in neighbours {
+                    let j = sampled[b as usize];
+                    rows[i as usize].push(j);
+                    rows[j as usize].push(i);
+                }
+            }
+        }
+        rows.par_iter_mut().for_each(|row| {
+            row.sort_unstable();
+            row.dedup();
+        });
+        let conv_slots = NeighbourSlots::from_rows(&rows, device)?;
+        let attention_rows: Vec<Vec<u32>> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                std::iter::once(i as u32)
+                    .chain(row.iter().copied())
+                    .collect()
+            })
+            .collect();
+        let attention_slots = NeighbourSlots::from_rows(&attention_rows, device)?;
+        let width = attention_slots.width();
+        let mask: Vec<f32> = attention_rows
+            .iter()
+            .flat_map(|row| {
+                (0..width).map(move |s| if s < row.len() { 0.0 } else { EMPTY_SLOT_LOGIT })
+            })
+            .collect();
+        // Ŝ row i: (flat attention entry, sampled position) of every sampled slot of row i.
+        let s_hat: Vec<Vec<(u32, u32)>> = attention_rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                row.iter()
+                    .enumerate()
+                    .filter_map(|(s, &j)| {
+                        let a = sample_position[j as usize];
+                        (a != u32::MAX).then_some(((i * width + s) as u32, a))
+                    })
+                    .collect()
+            })
+            .collect();
+        // Terms of A_s[a, b] = Σ_i Σ_{j ∈ row i} Ŝ[i, a] Ŝ[j, b] (the row of i holds i itself).
+        let mut terms: Vec<([u32; 2], u32, u32)> = attention_rows
+            .par_iter()
+            .zip(&s_hat)
+            .flat_map_iter(|(row, left)| {
+                let mut out = Vec::new();
+                for &(p, a) in left {
+                    for &j in row {
+                        for &(q, b) in &s_hat[j as usize] {
+                            if a != b {
+                                out.push(([a, b], p, q));
+                            }
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        terms.par_sort_unstable();
+        let mut pairs: Vec<[u32; 2]> = Vec::new();
+        let mut term_pair = Vec::with_capacity(terms.len());
+        for (pair, _, _) in &terms {
+            if pairs.last() != Some(pair) {
+                pairs.push(*pair);
+            }
+            term_pair.push((pairs.len() - 1) as u32);
+        }
+        let count = terms.len();
+        let term_left: Vec<u32> = terms.iter().map(|t| t.1).collect();
+        let term_right: Vec<u32> = terms.iter().map(|t| t.2).collect();
+        Ok(Self {
+            conv_slots,
+            attention_mask: Tensor::from_vec(mask, (n, width), device)?,
+            attention_slots,
+            pairs,
+            term_left: Tensor::from_vec(term_left, count, device)?,
+            term_right: Tensor::from_vec(term_right, count, device)?,
+            term_pair: Tensor::from_vec(term_pair, count, device)?,
+            sampled: sampled.to_vec(),
+        })
+    }
+
+    /// The sampled vertices, in the numbering of `A_s`.
+    pub fn sampled(&self) -> &[u32] {
+        &self.sampled
+    }
+
+    /// The non-zero pattern of `A_s`: `(a, b)` pairs of sampled positions, sorted, `a ≠ b`,
+    /// symmetric.
+    pub fn pairs(&self) -> &[[u32; 2]] {
+        &self.pairs
+    }
+
+    /// Eq. 6.3-6.4: the values of `A_s` on [`Self::pairs`] from the attention weights
+    /// `attention: (N, W)` (rows over the attention slots).
+    pub(crate) fn simplified_adjacency(&self, attention: &Tensor) -> Result<Tensor> {
+        let flat = attention.flatten_all()?;
+        let left = flat.index_select(&self.term_left, 0)?;
+        let right = flat.index_select(&self.term_right, 0)?;
+        let zeros = Tensor::zeros(self.pairs.len(), flat.dtype(), flat.device())?;
+        Ok(zeros.index_add(&self.term_pair, &(left * right)?, 0)?)
+    }
+
+    /// The index in [`Self::pairs`] of `(a, b)`, when it is non-zero.
+    pub fn pair_index(&self, a: u32, b: u32) -> Option<usize> {
+        self.pairs.binary_search(&[a, b]).ok()
+    }
+
+    /// The pattern as a symmetric `M×M` matrix of ones (for [`meshgnn_graph::candidate_triangles`]).
+    pub fn pattern(&self) -> Result<CsrMatrix> {
+        let triplets: Vec<(u32, u32, f32)> = self.pairs.iter().map(|&[a, b]| (a, b, 1.0)).collect();
+        Ok(CsrMatrix::from_triplets(
+            self.sampled.len(),
+            self.sampled.len(),
+            &triplets,
+        )?)
+    }
+}
