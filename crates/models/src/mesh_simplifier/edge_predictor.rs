@@ -138,7 +138,7 @@ mod tests {
     use super::*;
     use candle_core::{DType, Device};
     use candle_nn::VarMap;
-    use meshgnn_graph::vertex_adjacency;
+    use meshgnn_graph::{CsrMatrix, vertex_adjacency};
 
     fn predictor(dtype: DType) -> (VarMap, EdgePredictor) {
         let map = VarMap::new();
@@ -158,8 +158,6 @@ mod tests {
         let graph = ExtendedGraph::new(&points, &adjacency, sampled, 4, &Device::Cpu).unwrap();
         (points, adjacency, graph)
     }
-
-    use meshgnn_graph::CsrMatrix;
 
     /// `ŜᵀAŜ` computed densely from the attention rows, for comparison.
     fn dense_product(graph: &ExtendedGraph, attention: &[Vec<f64>]) -> Vec<Vec<f64>> {
@@ -265,7 +263,7 @@ mod tests {
         let (_, _, graph) = setup(&[0, 41]);
         assert!(graph.pair_index(0, 1).is_some());
         let repeated = ExtendedGraph::new(
-            &meshgnn_geometry::icosphere(1).vertices().to_vec(),
+            meshgnn_geometry::icosphere(1).vertices(),
             &vertex_adjacency(&meshgnn_geometry::icosphere(1)).unwrap(),
             &[3, 3],
             4,
