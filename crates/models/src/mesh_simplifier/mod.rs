@@ -1,16 +1,23 @@
 //! The neural mesh simplifier of thesis ch. 6 (a learnable point sampler, an edge predictor
 //! and a face classifier, trained end to end). This module holds the parts built so far: the
-//! DevConv layer (eq. 6.1) on fixed-width neighbour slots, the point sampler (ch. 6.3.1) and
-//! the edge predictor with its candidate triangles (ch. 6.3.2, eq. 6.2-6.5).
+//! DevConv layer (eq. 6.1) on fixed-width neighbour slots, the point sampler (ch. 6.3.1), the
+//! edge predictor with its candidate triangles (ch. 6.3.2, eq. 6.2-6.5) and the face
+//! classifier with its TriConv layer (ch. 6.3.3, eq. 6.6-6.7).
 
 mod dev_conv;
 mod edge_predictor;
 mod extended_graph;
+mod face_classifier;
+mod face_graph;
 mod neighbour_slots;
 mod point_sampler;
+mod tri_conv;
 
 pub use dev_conv::{DevConv, DevConvConfig};
 pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePredictorConfig};
 pub use extended_graph::ExtendedGraph;
+pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
+pub use face_graph::FaceGraph;
 pub use neighbour_slots::NeighbourSlots;
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
+pub use tri_conv::{TriConv, TriConvConfig};

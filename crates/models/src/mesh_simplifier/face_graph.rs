@@ -1,0 +1,129 @@
+//! The graph the face classifier works on (thesis ch. 6.3.3): each candidate triangle linked to
+//! the `k` candidates with the nearest barycentres (k = 20, ch. 6.4), and the relative position
+//! encoding of every link, eq. 6.6:
+//! `r_{n,m} = [t_n^min − t_m^min ‖ t_n^max − t_m^max ‖ b_n − b_m]`, where `t^max` (`t^min`) is
+//! the per-coordinate maximum (minimum) of the triangle's edge vectors `e_ij = x_i − x_j`,
+//! `e_ik`, `e_jk` (corners `i < j < k` as the candidates list them) and `b` its barycentre.
+//!
+//! The encoding depends on positions only, so it is computed once on the host.
+//!
+//! # Conventions
+//! - `neighbours`: `(F·K)` `u32`, row-major; `relative`: `(F·K, 9)`.
+//! - With fewer than two candidates there are no links: `K = 0`.
+
+use candle_core::{Device, Tensor};
+use meshgnn_graph::{triangle_barycentres, triangle_knn_graph};
+
+use crate::Result;
+
+/// Links between candidate triangles and their eq. 6.6 encodings.
+#[derive(Clone, Debug)]
+pub struct FaceGraph {
+    pub(crate) neighbours: Tensor,
+    pub(crate) relative: Tensor,
+    len: usize,
+    width: usize,
+}
+
+/// `[t^min ‖ t^max]` of a triangle: per-coordinate extremes of its three edge vectors.
+fn edge_extremes(corners: [[f32; 3]; 3]) -> [f32; 6] {
+    let [i, j, k] = corners;
+    let edges = [(i, j), (i, k), (j, k)].map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]]);
+    let mut out = [0.0; 6];
+    for c in 0..3 {
+        out[c] = edges.iter().map(|e| e[c]).fold(f32::INFINITY, f32::min);
+        out[c + 3] = edges.iter().map(|e| e[c]).fold(f32::NEG_INFINITY, f32::max);
+    }
+    out
+}
+
+impl FaceGraph {
+    /// The graph of `triangles` (indices into `vertices`), each linked to its `k` nearest
+    /// (by barycentre; fewer when there are not `k + 1` candidates).
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_models::mesh_simplifier::FaceGraph;
+    /// let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    /// let g = FaceGraph::new(&v, &[[0, 1, 2], [1, 2, 3]], 20, &Device::Cpu)?;
+    /// assert_eq!((g.len(), g.width()), (2, 1));
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn new(
+        vertices: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        k: usize,
+        device: &Device,
+    ) -> Result<Self> {
+        let len = triangles.len();
+        let width = k.min(len.saturating_sub(1));
+        let centres = triangle_barycentres(vertices, triangles)?;
+        let neighbours = match width {
+            0 => Vec::new(),
+            _ => triangle_knn_graph(vertices, triangles, width)?.indices,
+        };
+        let extremes: Vec<[f32; 6]> = triangles
+            .iter()
+            .map(|t| edge_extremes(t.map(|v| vertices[v as usize])))
+            .collect();
+        let mut relative = Vec::with_capacity(len * width * 9);
+        for (n, row) in neighbours.chunks(width.max(1)).enumerate() {
+            for &m in row {
+                let m = m as usize;
+                relative.extend((0..6).map(|c| extremes[n][c] - extremes[m][c]));
+                relative.extend((0..3).map(|c| centres[n][c] - centres[m][c]));
+            }
+        }
+        Ok(Self {
+            neighbours: Tensor::from_vec(neighbours, len * width, device)?,
+            relative: Tensor::from_vec(relative, (len * width, 9), device)?,
+            len,
+            width,
+        })
+    }
+
+    /// Number of candidate triangles F.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when there are no candidates.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Links per triangle K.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_encoding_matches_a_hand_computation() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [0.0, 0.0, 3.0],
+        ];
+        let g = FaceGraph::new(&v, &[[0, 1, 2], [0, 1, 3]], 5, &Device::Cpu).unwrap();
+        // t0: e01 = (-2,0,0), e02 = (0,-2,0), e12 = (2,-2,0) → min (-2,-2,0), max (2,0,0),
+        //     barycentre (2/3, 2/3, 0).
+        // t1: e01 = (-2,0,0), e03 = (0,0,-3), e13 = (2,0,-3) → min (-2,0,-3), max (2,0,0),
+        //     barycentre (2/3, 0, 1).
+        let r: Vec<Vec<f32>> = g.relative.to_vec2().unwrap();
+        let expected0 = [0.0, -2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 2.0 / 3.0, -1.0];
+        for (got, want) in r[0].iter().zip(expected0) {
+            assert!((got - want).abs() < 1e-6, "{:?}", r[0]);
+        }
+        for (a, b) in r[0].iter().zip(&r[1]) {
+            assert!((a + b).abs() < 1e-6, "r(1,0) = −r(0,1)");
+        }
+        let one = FaceGraph::new(&v, &[[0, 1, 2]], 5, &Device::Cpu).unwrap();
+        assert_eq!((one.len(), one.width()), (1, 0));
+    }
+}
