@@ -34,6 +34,7 @@ mod graph_laplacian;
 mod input_content;
 mod laplacian_eigenvectors;
 mod manifold;
+mod manifold_face_selection;
 mod mass_matrix;
 mod mesh_report;
 mod non_manifold_edges;
@@ -78,6 +79,7 @@ pub use input_content::{
 };
 pub use laplacian_eigenvectors::{LaplacianEigenpairs, laplacian_eigenvectors};
 pub use manifold::{is_edge_manifold, is_vertex_manifold, non_manifold_vertices};
+pub use manifold_face_selection::select_manifold_faces;
 pub use mass_matrix::lumped_mass_matrix;
 pub use mesh_report::{MeshReport, mesh_report};
 pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
