@@ -1,8 +1,9 @@
 //! The neural mesh simplifier of thesis ch. 6 (a learnable point sampler, an edge predictor
-//! and a face classifier, trained end to end). This module holds the parts built so far: the
-//! DevConv layer (eq. 6.1) on fixed-width neighbour slots, the point sampler (ch. 6.3.1), the
-//! edge predictor with its candidate triangles (ch. 6.3.2, eq. 6.2-6.5) and the face
-//! classifier with its TriConv layer (ch. 6.3.3, eq. 6.6-6.7).
+//! and a face classifier, trained end to end): the DevConv layer (eq. 6.1) on fixed-width
+//! neighbour slots, the point sampler (ch. 6.3.1), the edge predictor with its candidate
+//! triangles (ch. 6.3.2, eq. 6.2-6.5), the face classifier with its TriConv layer (ch. 6.3.3,
+//! eq. 6.6-6.7) and the model that chains them with the final manifold pass. Not yet here: the
+//! training objective's wiring, trained weights and the `meshsimplify --method neural` app.
 
 mod dev_conv;
 mod edge_predictor;
@@ -10,6 +11,7 @@ mod extended_graph;
 mod face_classifier;
 mod face_graph;
 mod neighbour_slots;
+mod neural_mesh_simplifier;
 mod point_sampler;
 mod tri_conv;
 
@@ -19,5 +21,9 @@ pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
 pub use face_graph::FaceGraph;
 pub use neighbour_slots::NeighbourSlots;
+pub use neural_mesh_simplifier::{
+    FACE_THRESHOLD, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
+    NeuralSimplification, SimplifierPass,
+};
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use tri_conv::{TriConv, TriConvConfig};
