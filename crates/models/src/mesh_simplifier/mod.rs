@@ -2,8 +2,9 @@
 //! and a face classifier, trained end to end): the DevConv layer (eq. 6.1) on fixed-width
 //! neighbour slots, the point sampler (ch. 6.3.1), the edge predictor with its candidate
 //! triangles (ch. 6.3.2, eq. 6.2-6.5), the face classifier with its TriConv layer (ch. 6.3.3,
-//! eq. 6.6-6.7) and the model that chains them with the final manifold pass. Not yet here: the
-//! training objective's wiring, trained weights and the `meshsimplify --method neural` app.
+//! eq. 6.6-6.7), the model that chains them with the final manifold pass, and the eq. 6.14
+//! objective of one pass. Not yet here: the training run, bundled weights and the
+//! `meshsimplify --method neural` app.
 
 mod dev_conv;
 mod edge_predictor;
@@ -13,6 +14,7 @@ mod face_graph;
 mod neighbour_slots;
 mod neural_mesh_simplifier;
 mod point_sampler;
+mod simplification_loss;
 mod tri_conv;
 
 pub use dev_conv::{DevConv, DevConvConfig};
@@ -26,4 +28,7 @@ pub use neural_mesh_simplifier::{
     NeuralSimplification, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
+pub use simplification_loss::{
+    PENALTY_NEIGHBOURS, SimplificationTarget, simplification_loss, simplification_terms,
+};
 pub use tri_conv::{TriConv, TriConvConfig};
