@@ -4,7 +4,8 @@
 //! and analysis" on candle (CPU by default, `cuda` feature optional): the hand models of ch. 3
 //! (`handy`: the spiral-convolution autoencoder "Handy++" and its PCA baseline) and the
 //! learnable point-cloud simplifier of ch. 5 (`point_simplifier`, with the simplification
-//! methods it is compared with in `point_selection`).
+//! methods it is compared with in `point_selection`), and the neural mesh simplifier of ch. 6
+//! (`mesh_simplifier`: built and tested, not yet trained; docs/mesh_simplifier_model.md).
 //!
 //! One convention for every model (docs/architecture.md): a config struct, `new(vb, &cfg)` and
 //! `forward`; one training loop ([`training::train`] over a [`training::Trainable`]); one
