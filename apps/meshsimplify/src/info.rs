@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
-use meshgnn_geometry::{InputUse, MeshFormat, MeshReport, mesh_report, read_input_mesh};
+use anyhow::{Result, bail};
+use meshgnn_geometry::{InputUse, MeshReport, mesh_files_in, mesh_report, read_input_mesh};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -28,7 +28,7 @@ pub struct InfoArgs {
 /// the command then fails, naming how many files failed.
 pub fn run(args: &InfoArgs) -> Result<()> {
     if args.path.is_dir() {
-        let files = mesh_files(&args.path)?;
+        let files = mesh_files_in(&args.path)?;
         if files.is_empty() {
             bail!(
                 "{} holds no mesh file (.obj .ply .off .gltf .glb .xyz)",
@@ -123,18 +123,4 @@ fn print_text(report: &Value) {
     }
     let seconds = field("load_seconds").as_f64().unwrap_or_default();
     println!("  {:<19}{:.3} s", "load_time", seconds);
-}
-
-/// The files of `dir` whose extension names a mesh format, sorted by name.
-fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))?;
-    let mut files = Vec::new();
-    for entry in entries {
-        let path = entry.with_context(|| format!("{}", dir.display()))?.path();
-        if path.is_file() && MeshFormat::from_path(&path).is_ok() {
-            files.push(path);
-        }
-    }
-    files.sort();
-    Ok(files)
 }

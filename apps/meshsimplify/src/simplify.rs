@@ -1,5 +1,7 @@
 //! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem] [--max-error E]
-//! [--seed S] [--force] [--json]`: simplify a mesh file to a target size.
+//! [--seed S] [--force] [--json]`: simplify a mesh file to a target size, or every mesh file
+//! of a folder IN into the folder OUT (same names; files in parallel; a failed file never
+//! stops the others, and the exit code says whether any failed).
 //!
 //! Any format the geometry crate reads and writes (OBJ, PLY, OFF, glTF/GLB; the output format
 //! follows OUT's extension, written atomically). Every argument is checked before anything is
@@ -8,16 +10,20 @@
 //!
 //! `--json` prints one object with the keys `input_faces`, `output_faces`, `error`,
 //! `seconds`, `stop_reason` (`error` is the largest collapse error as a distance in the input's
-//! units, see `meshgnn_graph::Decimation::error_distance`).
+//! units, see `meshgnn_graph::Decimation::error_distance`); for a folder, one such line per
+//! file with `input` and `output` added, or `{"input", "failure"}` for a file that failed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use meshgnn_geometry::{InputUse, MeshFormat, OutputGuard, read_input_mesh, write_mesh};
+use meshgnn_geometry::{
+    InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, write_mesh,
+};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
-use serde_json::json;
+use rayon::prelude::*;
+use serde_json::{Value, json};
 
 /// Simplification methods.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,9 +36,9 @@ pub enum Method {
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("size").required(true).args(["ratio", "faces"])))]
 pub struct SimplifyArgs {
-    /// The mesh to simplify (.obj .ply .off .gltf .glb).
+    /// The mesh to simplify (.obj .ply .off .gltf .glb), or a folder of them.
     pub input: PathBuf,
-    /// Where to write the result; the format follows the extension.
+    /// Where to write the result (the format follows the extension), or the output folder.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Keep this fraction of the faces, in (0, 1].
@@ -58,7 +64,7 @@ pub struct SimplifyArgs {
     pub json: bool,
 }
 
-/// Runs `meshsimplify simplify`.
+/// Runs `meshsimplify simplify` on one file, or on every mesh file of a folder.
 pub fn run(args: &SimplifyArgs) -> Result<()> {
     let target = match (args.ratio, args.faces) {
         (Some(r), _) if !(r > 0.0 && r <= 1.0) => bail!("--ratio {r} is outside (0, 1]"),
@@ -71,21 +77,20 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     {
         bail!("--max-error {e} must be a finite distance >= 0");
     }
+    let options = DecimationOptions {
+        target,
+        max_error: args.max_error,
+        ..Default::default()
+    };
+    if args.input.is_dir() {
+        return run_folder(args, &options);
+    }
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
     let guarded = if args.force { None } else { Some(&args.input) };
     OutputGuard::new(guarded)
         .overridable_by("--force")
         .check(&args.output)?;
-    let mesh = read_input_mesh(&args.input, InputUse::Surface)?;
-    check_target(&target, mesh.face_count())
-        .with_context(|| format!("simplifying {}", args.input.display()))?;
-
-    let options = DecimationOptions {
-        target,
-        max_error: args.max_error,
-        ..Default::default()
-    };
     let start = Instant::now();
     let bar = ProgressBar::hidden();
     bar.set_length(1000);
@@ -94,44 +99,160 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut shown = false;
-    let result = match args.method {
-        Method::Qem => decimate_with_progress(&mesh, &options, &mut |fraction| {
-            if !shown && start.elapsed() > Duration::from_secs(1) {
-                bar.set_draw_target(ProgressDrawTarget::stderr());
-                shown = true;
-            }
-            bar.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
-        })?,
-    };
+    let outcome = simplify_file(&args.input, &args.output, args.method, &options, &mut |f| {
+        if !shown && start.elapsed() > Duration::from_secs(1) {
+            bar.set_draw_target(ProgressDrawTarget::stderr());
+            shown = true;
+        }
+        bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+    });
     bar.finish_and_clear();
-    let seconds = start.elapsed().as_secs_f64();
-    write_mesh(&args.output, &result.mesh)
-        .with_context(|| format!("writing {}", args.output.display()))?;
-
+    let outcome = outcome?;
     if args.json {
-        let summary = json!({
-            "input_faces": result.input_faces,
-            "output_faces": result.mesh.face_count(),
-            "error": result.error_distance,
-            "seconds": seconds,
-            "stop_reason": result.stop_reason.as_str(),
-        });
-        println!("{summary}");
+        println!("{}", outcome.to_json(None));
     } else {
+        outcome.print(&args.input, &args.output);
+    }
+    Ok(())
+}
+
+/// What one simplified file reports.
+struct Outcome {
+    input_faces: usize,
+    input_vertices: usize,
+    faces: usize,
+    vertices: usize,
+    error: f64,
+    seconds: f64,
+    stop_reason: &'static str,
+    welded: bool,
+}
+
+impl Outcome {
+    /// The `--json` keys; a folder run adds the file paths.
+    fn to_json(&self, files: Option<(&Path, &Path)>) -> Value {
+        let mut value = json!({
+            "input_faces": self.input_faces,
+            "output_faces": self.faces,
+            "error": self.error,
+            "seconds": self.seconds,
+            "stop_reason": self.stop_reason,
+        });
+        if let (Some((input, output)), Some(map)) = (files, value.as_object_mut()) {
+            map.insert("input".into(), json!(input.display().to_string()));
+            map.insert("output".into(), json!(output.display().to_string()));
+        }
+        value
+    }
+
+    fn print(&self, input: &Path, output: &Path) {
         println!(
             "{}: {} faces, {} vertices -> {}: {} faces, {} vertices ({}{})",
-            args.input.display(),
-            result.input_faces,
-            result.input_vertices,
-            args.output.display(),
-            result.mesh.face_count(),
-            result.mesh.vertex_count(),
-            result.stop_reason.as_str(),
-            if result.welded { ", welded" } else { "" },
+            input.display(),
+            self.input_faces,
+            self.input_vertices,
+            output.display(),
+            self.faces,
+            self.vertices,
+            self.stop_reason,
+            if self.welded { ", welded" } else { "" },
         );
         println!(
-            "error {:.3e} (input units), {seconds:.3} s",
-            result.error_distance
+            "error {:.3e} (input units), {:.3} s",
+            self.error, self.seconds
+        );
+    }
+}
+
+/// Reads, checks, simplifies and writes one file, reporting progress in [0, 1].
+fn simplify_file(
+    input: &Path,
+    output: &Path,
+    method: Method,
+    options: &DecimationOptions,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Outcome> {
+    let mesh = read_input_mesh(input, InputUse::Surface)?;
+    check_target(&options.target, mesh.face_count())
+        .with_context(|| format!("simplifying {}", input.display()))?;
+    let start = Instant::now();
+    let result = match method {
+        Method::Qem => decimate_with_progress(&mesh, options, progress)
+            .with_context(|| format!("simplifying {}", input.display()))?,
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    write_mesh(output, &result.mesh).with_context(|| format!("writing {}", output.display()))?;
+    Ok(Outcome {
+        input_faces: result.input_faces,
+        input_vertices: result.input_vertices,
+        faces: result.mesh.face_count(),
+        vertices: result.mesh.vertex_count(),
+        error: result.error_distance,
+        seconds,
+        stop_reason: result.stop_reason.as_str(),
+        welded: result.welded,
+    })
+}
+
+/// Every mesh file of the folder `args.input` into the folder `args.output` under its own
+/// name, files in parallel with a progress bar over files. Every output is checked before
+/// anything is written; a file that fails is reported and the others go on; the run fails
+/// when any file did.
+fn run_folder(args: &SimplifyArgs, options: &DecimationOptions) -> Result<()> {
+    let files = mesh_files_in(&args.input)?;
+    if files.is_empty() {
+        bail!(
+            "{} holds no mesh file (.obj .ply .off .gltf .glb)",
+            args.input.display()
+        );
+    }
+    let outputs: Vec<PathBuf> = files
+        .iter()
+        .map(|file| args.output.join(file.file_name().unwrap_or_default()))
+        .collect();
+    let guarded = if args.force { None } else { Some(&args.input) };
+    let guard = OutputGuard::new(guarded).overridable_by("--force");
+    for output in &outputs {
+        guard.check(output)?;
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("creating {}", args.output.display()))?;
+    let bar = ProgressBar::new(files.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} files")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let results: Vec<Result<Outcome>> = files
+        .par_iter()
+        .zip(&outputs)
+        .map(|(input, output)| {
+            let outcome = simplify_file(input, output, args.method, options, &mut |_| {});
+            bar.inc(1);
+            outcome
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut failed = 0;
+    for ((input, output), result) in files.iter().zip(&outputs).zip(results) {
+        match (result, args.json) {
+            (Ok(outcome), true) => println!("{}", outcome.to_json(Some((input, output)))),
+            (Ok(outcome), false) => outcome.print(input, output),
+            (Err(error), json) => {
+                failed += 1;
+                let message = format!("{error:#}");
+                if json {
+                    let line = json!({ "input": input.display().to_string(), "failure": message });
+                    println!("{line}");
+                }
+                eprintln!("meshsimplify: {message}");
+            }
+        }
+    }
+    if failed > 0 {
+        bail!(
+            "{failed} of {} mesh files in {} failed (listed above); the others were written",
+            files.len(),
+            args.input.display()
         );
     }
     Ok(())

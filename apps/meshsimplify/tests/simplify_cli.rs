@@ -83,3 +83,72 @@ fn bad_arguments_write_nothing() {
         assert!(!output.exists(), "{args:?} wrote a file");
     }
 }
+
+#[test]
+fn a_folder_is_simplified_file_by_file_and_a_bad_file_never_stops_the_batch() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir(&input).unwrap();
+    write_mesh(input.join("a_sphere.ply"), &icosphere(3)).unwrap();
+    write_mesh(
+        input.join("b_cube.obj"),
+        &meshgnn_geometry::subdivided_cube(4),
+    )
+    .unwrap();
+    std::fs::write(input.join("c_broken.obj"), "f 1 2 3\n").unwrap();
+    std::fs::write(input.join("notes.txt"), "not a mesh").unwrap();
+    let output = dir.path().join("out");
+    let (i, o) = (input.to_str().unwrap(), output.to_str().unwrap());
+    let out = meshsimplify(&["simplify", i, "-o", o, "--ratio", "0.25", "--json"]);
+    assert!(!out.status.success(), "a failed file must fail the run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("1 of 3 mesh files"), "{stderr}");
+    let lines: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    assert_eq!(lines[0]["input_faces"], 1280);
+    assert_eq!(lines[0]["output_faces"], 320);
+    assert!(lines[1]["output_faces"].as_u64().unwrap() > 0);
+    assert!(
+        lines[2]["failure"]
+            .as_str()
+            .unwrap()
+            .contains("c_broken.obj")
+    );
+    for (name, line) in [("a_sphere.ply", &lines[0]), ("b_cube.obj", &lines[1])] {
+        let written = read_mesh(output.join(name)).unwrap();
+        assert_eq!(
+            written.face_count() as u64,
+            line["output_faces"].as_u64().unwrap()
+        );
+        assert!(line["output"].as_str().unwrap().ends_with(name));
+    }
+    assert!(!output.join("c_broken.obj").exists());
+    assert!(!output.join("notes.txt").exists());
+
+    // Without the broken file the run succeeds, byte-identical to the first.
+    let first = std::fs::read(output.join("a_sphere.ply")).unwrap();
+    std::fs::remove_file(input.join("c_broken.obj")).unwrap();
+    let again = dir.path().join("again");
+    let a = again.to_str().unwrap();
+    let out = meshsimplify(&["simplify", i, "-o", a, "--ratio", "0.25"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read(again.join("a_sphere.ply")).unwrap(), first);
+
+    // The output folder may not be the input folder: refused before anything is written.
+    let before = std::fs::read(input.join("b_cube.obj")).unwrap();
+    let out = meshsimplify(&["simplify", i, "-o", i, "--faces", "10"]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("refusing to write"),
+        "{:?}",
+        out
+    );
+    assert_eq!(std::fs::read(input.join("b_cube.obj")).unwrap(), before);
+}

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use meshgnn_data::gaussian_noise;
-use meshgnn_geometry::{MeshFormat, OutputGuard, atomic_write, check_count};
+use meshgnn_geometry::{OutputGuard, atomic_write, check_count, mesh_files_in};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation,
 };
@@ -98,7 +98,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(path) = &args.json_out {
         OutputGuard::new(std::iter::once(&args.dir).chain(&args.weights)).check(path)?;
     }
-    let files = list_inputs(&args.dir)?;
+    let files = mesh_files_in(&args.dir)?;
     if files.is_empty() {
         bail!(
             "{} holds no cloud or mesh (.ply .obj .off .gltf .glb .xyz)",
@@ -151,22 +151,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         print!("{}", to_markdown(args, &names, &rows, &skipped));
     }
     Ok(())
-}
-
-/// Supported files directly in `dir`, sorted by name.
-fn list_inputs(dir: &Path) -> Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))?;
-    let mut files = Vec::new();
-    for entry in entries {
-        let path = entry
-            .with_context(|| format!("listing {}", dir.display()))?
-            .path();
-        if path.is_file() && MeshFormat::from_path(&path).is_ok() {
-            files.push(path);
-        }
-    }
-    files.sort();
-    Ok(files)
 }
 
 fn file_name(path: &Path) -> String {

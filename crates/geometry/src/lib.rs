@@ -51,7 +51,7 @@ pub use error::{Error, Result};
 /// The faer version whose sparse and dense matrices this crate returns.
 pub use faer;
 pub use io::{
-    MeshFormat, OutputGuard, PlyEncoding, atomic_write, read_mesh, read_mesh_bytes,
+    MeshFormat, OutputGuard, PlyEncoding, atomic_write, mesh_files_in, read_mesh, read_mesh_bytes,
     read_point_cloud, read_point_cloud_bytes, remove_temporaries_on_interrupt, write_mesh,
     write_ply, write_point_cloud,
 };

@@ -9,6 +9,7 @@ mod format_error;
 mod gltf;
 mod gltf_buffers;
 mod mesh_data;
+mod mesh_files;
 mod obj;
 mod off;
 mod output_guard;
@@ -22,6 +23,7 @@ mod xyz;
 
 pub use atomic_write::{atomic_write, remove_temporaries_on_interrupt};
 pub use format::MeshFormat;
+pub use mesh_files::mesh_files_in;
 pub use output_guard::OutputGuard;
 pub use ply::PlyEncoding;
 pub use read_mesh::{read_mesh, read_mesh_bytes};
