@@ -81,7 +81,6 @@ impl ExtendedGraph {
                 }
             }
         }
-        let mut links: Vec<Vec<u32>> = vec![Vec::new(); sampled.len()];
         let mut rows: Vec<Vec<u32>> = (0..n)
             .map(|i| {
                 let (columns, _) = adjacency.row(i);
@@ -109,15 +108,20 @@ impl ExtendedGraph {
             row.sort_unstable();
             row.dedup();
         });
-        // The pairs A_s is evaluated on: sampled vertices linked in the extended graph.
-        for (a, &i) in sampled.iter().enumerate() {
-            links[a] = rows[i as usize]
-                .iter()
-                .map(|&j| sample_position[j as usize])
-                .filter(|&b| b != u32::MAX)
-                .collect();
-            links[a].sort_unstable();
-        }
+        // The pairs A_s is evaluated on: sampled vertices linked in the extended graph
+        // (sorted, for binary search below).
+        let links: Vec<Vec<u32>> = sampled
+            .iter()
+            .map(|&i| {
+                let mut linked: Vec<u32> = rows[i as usize]
+                    .iter()
+                    .map(|&j| sample_position[j as usize])
+                    .filter(|&b| b != u32::MAX)
+                    .collect();
+                linked.sort_unstable();
+                linked
+            })
+            .collect();
         let conv_slots = NeighbourSlots::from_rows(&rows, device)?;
         let attention_rows: Vec<Vec<u32>> = rows
             .iter()
