@@ -279,6 +279,28 @@ impl CsrMatrix {
         }
     }
 
+    /// The stored columns of every row without the diagonal: an adjacency matrix as neighbour
+    /// lists (what the graph layers gather over).
+    ///
+    /// ```
+    /// use meshgnn_graph::CsrMatrix;
+    /// let a = CsrMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0)])?;
+    /// assert_eq!(a.off_diagonal_rows(), vec![vec![1], vec![0]]);
+    /// # Ok::<(), meshgnn_graph::Error>(())
+    /// ```
+    pub fn off_diagonal_rows(&self) -> Vec<Vec<u32>> {
+        (0..self.rows)
+            .map(|i| {
+                let (columns, _) = self.row(i);
+                columns
+                    .iter()
+                    .copied()
+                    .filter(|&j| j as usize != i)
+                    .collect()
+            })
+            .collect()
+    }
+
     /// Entry `(i, j)`, zero when not stored or out of range. O(log row length).
     pub fn get(&self, i: usize, j: usize) -> f32 {
         let (cols, vals) = self.row(i);

@@ -6,7 +6,6 @@ mod chamfer_loss;
 mod curvature_preservation;
 mod edge_crossings;
 mod face_penalty;
-#[cfg(test)]
 mod gradient_check;
 mod mean_curvature;
 mod probabilistic_chamfer;
@@ -22,6 +21,7 @@ pub use adaptive_chamfer::{adaptive_chamfer, adaptive_chamfer_weights};
 pub use chamfer_loss::chamfer_loss;
 pub use curvature_preservation::curvature_preservation;
 pub use edge_crossings::edge_crossings;
+pub use gradient_check::{GradientDisagreement, gradient_disagreement};
 pub use mean_curvature::mean_curvature;
 pub use probabilistic_chamfer::probabilistic_chamfer;
 pub use probabilistic_surface_distance::{

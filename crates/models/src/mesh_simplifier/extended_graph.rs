@@ -81,16 +81,7 @@ impl ExtendedGraph {
                 }
             }
         }
-        let mut rows: Vec<Vec<u32>> = (0..n)
-            .map(|i| {
-                let (columns, _) = adjacency.row(i);
-                columns
-                    .iter()
-                    .copied()
-                    .filter(|&j| j as usize != i)
-                    .collect()
-            })
-            .collect();
+        let mut rows = adjacency.off_diagonal_rows();
         if sampled.len() >= 2 && k > 0 {
             let sampled_points: Vec<[f32; 3]> =
                 sampled.iter().map(|&i| points[i as usize]).collect();

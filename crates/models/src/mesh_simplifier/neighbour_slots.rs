@@ -73,17 +73,7 @@ impl NeighbourSlots {
                 ),
             });
         }
-        let rows: Vec<Vec<u32>> = (0..adjacency.rows())
-            .map(|i| {
-                let (columns, _) = adjacency.row(i);
-                columns
-                    .iter()
-                    .copied()
-                    .filter(|&j| j as usize != i)
-                    .collect()
-            })
-            .collect();
-        Self::from_rows(&rows, device)
+        Self::from_rows(&adjacency.off_diagonal_rows(), device)
     }
 
     /// The `k` nearest other points of every point (ties by index), for point clouds. Errors

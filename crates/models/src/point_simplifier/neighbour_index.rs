@@ -136,18 +136,7 @@ impl NeighbourIndex {
                 ),
             });
         }
-        let rows: Vec<Vec<u32>> = (0..adjacency.rows())
-            .map(|i| {
-                adjacency
-                    .row(i)
-                    .0
-                    .iter()
-                    .copied()
-                    .filter(|&j| j as usize != i)
-                    .collect()
-            })
-            .collect();
-        Self::from_rows(&rows, device)
+        Self::from_rows(&adjacency.off_diagonal_rows(), device)
     }
 
     fn from_flat(
