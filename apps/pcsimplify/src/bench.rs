@@ -9,10 +9,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use meshgnn_data::gaussian_noise;
-use meshgnn_geometry::{OutputGuard, atomic_write, check_count, mesh_files_in};
-use meshgnn_losses::metrics::{
-    EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation,
-};
+use meshgnn_geometry::{OutputGuard, atomic_write, mesh_files_in};
+use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -89,12 +87,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.methods.is_empty() {
         bail!("--methods: give at least one method");
     }
-    check_count(
-        "--k",
-        args.k,
-        2..=MAX_EVALUATION_CURVATURE_NEIGHBOURS,
-        "curvature neighbours per point",
-    )?;
+    crate::eval::check_curvature_neighbours(args.k)?;
     if let Some(path) = &args.json_out {
         OutputGuard::new(std::iter::once(&args.dir).chain(&args.weights)).check(path)?;
     }

@@ -33,14 +33,20 @@ pub struct EvalArgs {
     pub k: usize,
 }
 
-/// Loads both clouds, evaluates, prints text or JSON.
-pub fn run(args: &EvalArgs) -> Result<()> {
+/// Fails unless `--k` (curvature neighbours of the metrics) is within its bound.
+pub fn check_curvature_neighbours(k: usize) -> Result<()> {
     check_count(
         "--k",
-        args.k,
+        k,
         2..=MAX_EVALUATION_CURVATURE_NEIGHBOURS,
         "curvature neighbours per point",
     )?;
+    Ok(())
+}
+
+/// Loads both clouds, evaluates, prints text or JSON.
+pub fn run(args: &EvalArgs) -> Result<()> {
+    check_curvature_neighbours(args.k)?;
     let read = |path: &PathBuf, role: &str| {
         read_input_point_cloud(path).with_context(|| format!("reading the {role} cloud"))
     };

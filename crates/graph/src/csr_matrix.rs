@@ -279,17 +279,25 @@ impl CsrMatrix {
         }
     }
 
-    /// The stored columns of every row without the diagonal: an adjacency matrix as neighbour
-    /// lists (what the graph layers gather over).
+    /// The stored columns of every row without the diagonal: a square adjacency matrix as
+    /// neighbour lists (what the graph layers gather over). Errors when it is not square.
     ///
     /// ```
     /// use meshgnn_graph::CsrMatrix;
     /// let a = CsrMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0)])?;
-    /// assert_eq!(a.off_diagonal_rows(), vec![vec![1], vec![0]]);
+    /// assert_eq!(a.off_diagonal_rows()?, vec![vec![1], vec![0]]);
+    /// assert!(CsrMatrix::from_triplets(2, 3, &[])?.off_diagonal_rows().is_err());
     /// # Ok::<(), meshgnn_graph::Error>(())
     /// ```
-    pub fn off_diagonal_rows(&self) -> Vec<Vec<u32>> {
-        (0..self.rows)
+    pub fn off_diagonal_rows(&self) -> Result<Vec<Vec<u32>>> {
+        if self.cols != self.rows {
+            return Err(Error::ShapeMismatch {
+                what: "columns of the adjacency (must be square)",
+                expected: self.rows,
+                actual: self.cols,
+            });
+        }
+        Ok((0..self.rows)
             .map(|i| {
                 let (columns, _) = self.row(i);
                 columns
@@ -298,7 +306,7 @@ impl CsrMatrix {
                     .filter(|&j| j as usize != i)
                     .collect()
             })
-            .collect()
+            .collect())
     }
 
     /// Entry `(i, j)`, zero when not stored or out of range. O(log row length).

@@ -81,7 +81,7 @@ impl ExtendedGraph {
                 }
             }
         }
-        let mut rows = adjacency.off_diagonal_rows();
+        let mut rows = adjacency.off_diagonal_rows()?;
         if sampled.len() >= 2 && k > 0 {
             let sampled_points: Vec<[f32; 3]> =
                 sampled.iter().map(|&i| points[i as usize]).collect();

@@ -63,17 +63,7 @@ impl NeighbourSlots {
 
     /// From a mesh's vertex adjacency ([`meshgnn_graph::vertex_adjacency`]), diagonal dropped.
     pub fn from_adjacency(adjacency: &CsrMatrix, device: &Device) -> Result<Self> {
-        if adjacency.rows() != adjacency.cols() {
-            return Err(Error::Invalid {
-                what: "adjacency".into(),
-                reason: format!(
-                    "must be square, got {}×{}",
-                    adjacency.rows(),
-                    adjacency.cols()
-                ),
-            });
-        }
-        Self::from_rows(&adjacency.off_diagonal_rows(), device)
+        Self::from_rows(&adjacency.off_diagonal_rows()?, device)
     }
 
     /// The `k` nearest other points of every point (ties by index), for point clouds. Errors

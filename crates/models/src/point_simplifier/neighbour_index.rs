@@ -126,17 +126,7 @@ impl NeighbourIndex {
     /// the stored columns of row `i` are its neighbours (values ignored), padded to the largest
     /// degree as described in the module docs.
     pub fn from_adjacency(adjacency: &CsrMatrix, device: &Device) -> Result<Self> {
-        if adjacency.rows() != adjacency.cols() {
-            return Err(Error::Invalid {
-                what: "adjacency".into(),
-                reason: format!(
-                    "must be square, got {}×{}",
-                    adjacency.rows(),
-                    adjacency.cols()
-                ),
-            });
-        }
-        Self::from_rows(&adjacency.off_diagonal_rows(), device)
+        Self::from_rows(&adjacency.off_diagonal_rows()?, device)
     }
 
     fn from_flat(
