@@ -44,6 +44,26 @@ impl SelectionMethod {
         SelectionMethod::Tcp,
     ];
 
+    /// Every method, in the order of [`SelectionMethod::name`]'s listing.
+    pub const ALL: [SelectionMethod; 5] = [
+        SelectionMethod::Neural,
+        SelectionMethod::Fps,
+        SelectionMethod::Random,
+        SelectionMethod::Tcp,
+        SelectionMethod::Qem,
+    ];
+
+    /// The method called `name` (as [`SelectionMethod::name`] writes it), if any.
+    ///
+    /// ```
+    /// use meshgnn_models::point_selection::SelectionMethod;
+    /// assert_eq!(SelectionMethod::from_name("fps"), Some(SelectionMethod::Fps));
+    /// assert_eq!(SelectionMethod::from_name("FPS"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|method| method.name() == name)
+    }
+
     /// The name used on the command line and in JSON.
     pub fn name(self) -> &'static str {
         match self {

@@ -1,0 +1,96 @@
+//! `simplify`: QEM edge collapse (`meshgnn_graph::decimate`, the engine of `meshsimplify
+//! simplify`) on numpy arrays.
+
+use std::path::Path;
+
+use meshgnn_geometry::{InputUse, check_input_mesh};
+use meshgnn_graph::{DecimationOptions, Target, decimate};
+use numpy::PyArray2;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+use crate::arrays::index_vector_out;
+use crate::errors::{geometry_error, value_error};
+use crate::mesh_io::{mesh_in, mesh_out};
+
+/// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None,
+/// return_vertex_map=False) -> (V', F'[, vertex_map])`: exactly one of `ratio` (of the faces,
+/// in (0, 1]) and `faces` (a count in 1..=m). `vertex_map[i]` is the output vertex input
+/// vertex `i` was merged into.
+#[pyfunction]
+#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, return_vertex_map=false))]
+#[allow(clippy::too_many_arguments)]
+pub fn simplify<'py>(
+    py: Python<'py>,
+    v: &Bound<'py, PyAny>,
+    f: &Bound<'py, PyAny>,
+    ratio: Option<f64>,
+    faces: Option<usize>,
+    method: &str,
+    max_error: Option<f64>,
+    return_vertex_map: bool,
+) -> PyResult<Bound<'py, PyTuple>> {
+    match method {
+        "qem" => {}
+        "neural" => {
+            return Err(PyValueError::new_err(
+                "method=\"neural\": the neural mesh simplifier (thesis ch. 6) has no trained \
+                 weights yet; use method=\"qem\"",
+            ));
+        }
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "method={other:?}: choose \"qem\""
+            )));
+        }
+    }
+    if let Some(e) = max_error
+        && !(e >= 0.0 && e.is_finite())
+    {
+        return Err(PyValueError::new_err(format!(
+            "max_error={e}: must be a finite distance >= 0"
+        )));
+    }
+    let mesh = mesh_in(v, f)?;
+    check_input_mesh(Path::new("V, F"), &mesh, InputUse::Surface).map_err(geometry_error)?;
+    let target = target(ratio, faces, mesh.face_count())?;
+    let options = DecimationOptions {
+        target,
+        max_error,
+        ..Default::default()
+    };
+    let result = py
+        .detach(|| decimate(&mesh, &options))
+        .map_err(|e| value_error("simplify", e))?;
+    let (vertices, triangles): (Bound<'py, PyArray2<f32>>, _) = mesh_out(py, result.mesh)?;
+    if return_vertex_map {
+        let map = index_vector_out(py, &result.vertex_map);
+        PyTuple::new(
+            py,
+            [vertices.into_any(), triangles.into_any(), map.into_any()],
+        )
+    } else {
+        PyTuple::new(py, [vertices.into_any(), triangles.into_any()])
+    }
+}
+
+/// The decimation target of `ratio` or `faces` (exactly one), keeping 1 to all of the
+/// input's `face_count` faces.
+fn target(ratio: Option<f64>, faces: Option<usize>, face_count: usize) -> PyResult<Target> {
+    let fail = |message: String| Err(PyValueError::new_err(message));
+    match (ratio, faces) {
+        (Some(r), None) if !(r > 0.0 && r <= 1.0) => fail(format!("ratio={r} is outside (0, 1]")),
+        (Some(r), None) if (r * face_count as f64).round() < 1.0 => fail(format!(
+            "ratio={r} keeps 0 of the input's {face_count} faces: raise it to at least {:.3e}",
+            1.0 / face_count as f64
+        )),
+        (Some(r), None) => Ok(Target::Ratio(r)),
+        (None, Some(0)) => fail("faces=0: keep at least 1 face".into()),
+        (None, Some(n)) if n > face_count => fail(format!(
+            "faces={n} is more than the input's {face_count} faces: choose at most {face_count}"
+        )),
+        (None, Some(n)) => Ok(Target::Faces(n)),
+        _ => fail("give exactly one of ratio= and faces=".into()),
+    }
+}
