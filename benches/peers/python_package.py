@@ -19,7 +19,8 @@
 3. `mesh_hierarchy(factors=(4, 4, 4, 4))` on ~5k- and ~50k-vertex templates (QEM decimations
    of the bumpy sphere), against COMA's Python preprocessing (`lib/mesh_sampling.py`'s
    `qslim_decimator_transformer`, the decimation psbody-based pipelines run) when
-   `--coma-repo` points at a checkout of github.com/anuragranj/coma; its psbody/opendr imports
+   `--coma-repo` points at a checkout of github.com/anuragranj/coma (a folder holding its
+   `lib/`, e.g. `git archive HEAD lib | tar -x -C DIR`); its psbody/opendr imports
    are replaced by small numpy stand-ins, and only its first decimation (factor 4) is timed,
    stopped after `--coma-timeout` seconds: a lower bound on the whole pipeline, which also
    needs psbody's C++ AABB tree for the up-sampling.
@@ -88,7 +89,7 @@ def peers(mesh_path, ratios, rounds, with_error):
         return meshgnn.simplify(V, F, ratio=ratio)
 
     def fast(ratio):
-        return fast_simplification.simplify(V, F32, target_reduction=1.0 - ratio)
+        return fast_simplification.simplify(V, F32, target_count=round(ratio * len(F)))
 
     def meshlab(ratio):
         ms = pymeshlab.MeshSet()
@@ -204,14 +205,20 @@ def main():
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--coma-repo")
     parser.add_argument("--coma-timeout", type=int, default=600)
+    parser.add_argument("--sections", default="1,2,3,4", help="which of the four to run")
     args = parser.parse_args()
+    sections = {int(s) for s in args.sections.split(",")}
     print(f"meshgnn {meshgnn.__version__}, numpy {np.__version__}, {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as scratch:
-        call_overhead(args.mesh, args.cli, args.rounds, scratch)
-        peers(args.mesh, [0.1, 0.01], args.rounds, with_error=False)
-        peers(args.creature, [0.1, 0.01], args.rounds, with_error=True)
-        hierarchy(args.mesh, args.coma_repo, args.coma_timeout)
-        dask_batch(args.shapes, scratch)
+        if 1 in sections:
+            call_overhead(args.mesh, args.cli, args.rounds, scratch)
+        if 2 in sections:
+            peers(args.mesh, [0.1, 0.01], args.rounds, with_error=False)
+            peers(args.creature, [0.1, 0.01], args.rounds, with_error=True)
+        if 3 in sections:
+            hierarchy(args.mesh, args.coma_repo, args.coma_timeout)
+        if 4 in sections:
+            dask_batch(args.shapes, scratch)
 
 
 if __name__ == "__main__":
