@@ -31,16 +31,18 @@ def simplify_file(input_path: str, output_path: str, ratio, faces) -> dict:
     start = time.perf_counter()
     try:
         V, F = meshgnn.read_mesh(input_path)
-        V2, F2 = meshgnn.simplify(V, F, ratio=ratio, faces=faces)
+        V2, F2, info = meshgnn.simplify(V, F, ratio=ratio, faces=faces, return_info=True)
         meshgnn.write_mesh(output_path, V2, F2)
     except (ValueError, OSError) as error:
         return {"input": input_path, "failure": str(error)}
     return {
         "input": input_path,
         "output": output_path,
-        "input_faces": int(len(F)),
-        "output_faces": int(len(F2)),
+        "input_faces": info["input_faces"],
+        "output_faces": info["output_faces"],
         "vertices": int(len(V2)),
+        "error": info["error"],
+        "stop_reason": info["stop_reason"],
         "seconds": time.perf_counter() - start,
     }
 

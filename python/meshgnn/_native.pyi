@@ -1,7 +1,7 @@
 """Type stubs of the extension module; meshgnn/__init__.py re-exports these functions."""
 
 from os import PathLike
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -35,10 +35,12 @@ def simplify(
     method: str = "qem",
     max_error: Optional[float] = None,
     return_vertex_map: bool = False,
-) -> Tuple[np.ndarray, ...]:
+    return_info: bool = False,
+) -> Tuple[Any, ...]:
     """QEM edge collapse to `ratio` of the faces or to `faces` faces (exactly one).
-    Returns (V', F') or, with return_vertex_map, (V', F', vertex_map) where vertex_map[i] is
-    the output vertex input vertex i was merged into."""
+    Returns (V', F'), then vertex_map (vertex_map[i]: the output vertex input vertex i was
+    merged into) with return_vertex_map, then a dict (input_faces, output_faces, error,
+    stop_reason, collapses) with return_info."""
 
 def mesh_hierarchy(
     V: _Floats,

@@ -5,21 +5,21 @@ use std::path::Path;
 
 use meshgnn_geometry::{InputUse, check_input_mesh};
 use meshgnn_graph::{DecimationOptions, Target, decimate};
-use numpy::PyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyDict, PyTuple};
 
 use crate::arrays::index_vector_out;
 use crate::errors::{geometry_error, value_error};
 use crate::mesh_io::{mesh_in, mesh_out};
 
 /// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None,
-/// return_vertex_map=False) -> (V', F'[, vertex_map])`: exactly one of `ratio` (of the faces,
-/// in (0, 1]) and `faces` (a count in 1..=m). `vertex_map[i]` is the output vertex input
-/// vertex `i` was merged into.
+/// return_vertex_map=False, return_info=False) -> (V', F'[, vertex_map][, info])`: exactly one
+/// of `ratio` (of the faces, in (0, 1]) and `faces` (a count in 1..=m). `vertex_map[i]` is the
+/// output vertex input vertex `i` was merged into; `info` holds the keys of `meshsimplify
+/// simplify --json` (`input_faces`, `output_faces`, `error`, `stop_reason`) and `collapses`.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, return_vertex_map=false))]
+#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, return_vertex_map=false, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn simplify<'py>(
     py: Python<'py>,
@@ -30,6 +30,7 @@ pub fn simplify<'py>(
     method: &str,
     max_error: Option<f64>,
     return_vertex_map: bool,
+    return_info: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
     match method {
         "qem" => {}
@@ -63,16 +64,20 @@ pub fn simplify<'py>(
     let result = py
         .detach(|| decimate(&mesh, &options))
         .map_err(|e| value_error("simplify", e))?;
-    let (vertices, triangles): (Bound<'py, PyArray2<f32>>, _) = mesh_out(py, result.mesh)?;
-    if return_vertex_map {
-        let map = index_vector_out(py, &result.vertex_map);
-        PyTuple::new(
-            py,
-            [vertices.into_any(), triangles.into_any(), map.into_any()],
-        )
-    } else {
-        PyTuple::new(py, [vertices.into_any(), triangles.into_any()])
+    let info = PyDict::new(py);
+    info.set_item("input_faces", result.input_faces)?;
+    info.set_item("output_faces", result.mesh.face_count())?;
+    info.set_item("error", result.error_distance)?;
+    info.set_item("stop_reason", result.stop_reason.as_str())?;
+    info.set_item("collapses", result.collapses)?;
+    let map = return_vertex_map.then(|| index_vector_out(py, &result.vertex_map));
+    let (vertices, triangles) = mesh_out(py, result.mesh)?;
+    let mut out = vec![vertices.into_any(), triangles.into_any()];
+    out.extend(map.map(Bound::into_any));
+    if return_info {
+        out.push(info.into_any());
     }
+    PyTuple::new(py, out)
 }
 
 /// The decimation target of `ratio` or `faces` (exactly one), keeping 1 to all of the

@@ -26,6 +26,7 @@ def test_batch_simplifies_every_file_and_reports_the_broken_one(tmp_path):
     by_name = {r["input"].rsplit("/", 1)[-1]: r for r in report["results"]}
     assert "broken.obj" in by_name["broken.obj"]["failure"]
     assert by_name["icosphere_trimesh.obj"]["output_faces"] == 160
+    assert by_name["icosphere_trimesh.obj"]["stop_reason"] == "target_reached"
     assert by_name["sphere_open3d.ply"]["output_faces"] == 264
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
         "box_trimesh.off", "icosphere_trimesh.obj", "sphere_open3d.ply"

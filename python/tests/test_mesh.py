@@ -36,13 +36,18 @@ def test_points_round_trip(tmp_path):
 
 def test_simplify_matches_the_command_line_tool(tmp_path, creature_path, cli):
     V, F = meshgnn.read_mesh(creature_path)
-    V2, F2, vertex_map = meshgnn.simplify(V, F, faces=4460, return_vertex_map=True)
+    V2, F2, vertex_map, info = meshgnn.simplify(
+        V, F, faces=4460, return_vertex_map=True, return_info=True
+    )
     out = tmp_path / "cli.ply"
     report = subprocess.run(
         [cli("meshsimplify"), "simplify", creature_path, "-o", out, "--faces", "4460", "--json"],
         check=True, capture_output=True, text=True,
     )
-    assert json.loads(report.stdout)["output_faces"] == len(F2)
+    expected = json.loads(report.stdout)
+    for key in ("input_faces", "output_faces", "error", "stop_reason"):
+        assert info[key] == expected[key], key
+    assert info["output_faces"] == len(F2) and info["collapses"] > 0
     V_cli, F_cli = meshgnn.read_mesh(out)
     np.testing.assert_array_equal(F2, F_cli)
     np.testing.assert_array_equal(V2, V_cli)
