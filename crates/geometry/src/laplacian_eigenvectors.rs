@@ -8,11 +8,17 @@
 //! With `M` diagonal the problem is the symmetric `A y = λ y`, `A = M^{-1/2} L M^{-1/2}`,
 //! `x = M^{-1/2} y`. Shift-invert around a small negative shift `σ` turns the smallest `λ`
 //! into the largest `μ = 1/(λ − σ)` of `M^{1/2} (L − σM)^{-1} M^{1/2}`; block Lanczos with full
-//! re-orthogonalisation (twice, BLAS-3 through faer) builds a Krylov basis, one sparse
-//! Cholesky factorisation of `L − σM` (faer, AMD fill-reducing ordering) serves every solve,
-//! and a dense symmetric eigen-solve of the small projected matrix gives Ritz pairs; the basis
-//! is extended until every wanted Ritz residual is below `1e-9 μ`. Memory is `#V × O(k)`,
-//! never `#V²`.
+//! re-orthogonalisation (block classical Gram-Schmidt, BLAS-3 through faer, a second pass
+//! only for a block that lost most of its norm) builds a Krylov basis, one sparse Cholesky
+//! factorisation of `L − σM` (faer, AMD fill-reducing ordering) serves every solve, and a
+//! dense symmetric eigen-solve of the small projected matrix gives Ritz pairs; the basis is
+//! extended until every wanted Ritz residual is below `1e-9 μ`. Memory is `#V × O(k)`, never
+//! `#V²`.
+//!
+//! The null vector `M^{1/2}·1` (λ = 0) is known and locked at the start of the basis: the
+//! iteration then sees `μ` from `1/λ₁` down, instead of from `1/|σ| ≈ 1e8/λ-scale`, a range
+//! that would amplify rounding along the null vector every step (and made a single
+//! Gram-Schmidt pass diverge on a 4.5k-vertex mesh before the null vector was locked).
 //!
 //! Each connected component is solved on its own (its eigenpairs are those of the whole
 //! operator, and a zero eigenvalue per component would otherwise defeat single-vector
@@ -54,6 +60,10 @@ const DENSE_LIMIT: usize = 600;
 const TOLERANCE: f64 = 1e-9;
 /// Largest Lanczos block.
 const MAX_BLOCK: usize = 24;
+/// A Gram-Schmidt pass is repeated when a column keeps less than this fraction of its norm:
+/// one pass leaves an orthogonality error of about ε divided by that fraction (every step on
+/// the 41k-vertex bumpy sphere keeps ≥ 0.33, so it takes one pass each).
+const REORTHOGONALIZE_BELOW: f64 = 0.1;
 
 /// The `k` smallest eigenpairs of `L x = λ M x` (cotangent `L`, lumped `M`) of `mesh`; see the
 /// module documentation. Fails on a mesh without faces of positive area, on `k = 0`, on `k`
@@ -214,8 +224,21 @@ fn component_eigenpairs(
         scale_rows(&mut y, &sqrt_mass);
         y
     };
-    let (mu, vectors) = block_lanczos(n, want, op)?;
-    let values = mu.iter().map(|&m| sigma + 1.0 / m).collect();
+    // The component's null vector y₀ ∝ M^{1/2}·1 (L·1 = 0) is known: lock it instead of
+    // letting Lanczos find it, so the operator the iteration sees spans 1/λ₁ … instead of
+    // 1/|σ| ≈ 1e8 … (rounding along y₀ would be amplified by that range every step).
+    let norm = sqrt_mass.iter().map(|m| m * m).sum::<f64>().sqrt();
+    let null = faer::Col::<f64>::from_fn(n, |i| sqrt_mass[i] / norm);
+    let (mu, lanczos_vectors) = match want {
+        1 => (Vec::new(), Mat::<f64>::zeros(n, 0)),
+        _ => block_lanczos(n, want - 1, null.as_ref(), op)?,
+    };
+    let values = std::iter::once(0.0)
+        .chain(mu.iter().map(|&m| sigma + 1.0 / m))
+        .collect();
+    let mut vectors = Mat::<f64>::zeros(n, want);
+    vectors.col_mut(0).copy_from(&null);
+    vectors.subcols_mut(1, want - 1).copy_from(&lanczos_vectors);
     Ok((values, vectors))
 }
 
@@ -252,10 +275,12 @@ fn dense_eigenpairs(
 }
 
 /// The `want` largest eigenpairs `(μ descending, vectors n×want)` of the symmetric positive
-/// definite operator `op` by block Lanczos with full re-orthogonalisation.
+/// definite operator `op` restricted to the complement of its unit eigenvector `locked`, by
+/// block Lanczos with full re-orthogonalisation.
 fn block_lanczos(
     n: usize,
     want: usize,
+    locked: faer::ColRef<'_, f64>,
     op: impl Fn(Mat<f64>) -> Mat<f64>,
 ) -> Result<(Vec<f64>, Mat<f64>)> {
     let block = want.clamp(1, MAX_BLOCK);
@@ -264,24 +289,43 @@ fn block_lanczos(
     let mut projected = Mat::<f64>::zeros(capacity, capacity);
     let mut rng = StdRng::seed_from_u64(0x5eed_1a9c);
     let mut next = Mat::<f64>::from_fn(n, block, |_, _| rng.random_range(-1.0..1.0));
-    let (v0, _) = orthonormalize(&mut next, basis.subcols(0, 0), n, &mut rng);
-    basis.subcols_mut(0, v0.ncols()).copy_from(&v0);
-    let mut size = v0.ncols();
-    let mut current = (0, size);
+    // Column 0 holds `locked`; `op` is never applied to it, so its row and column of the
+    // projected matrix stay zero and its Ritz value 0 is never among the wanted.
+    basis.col_mut(0).copy_from(locked);
+    for _ in 0..2 {
+        let c = locked.transpose() * &next;
+        next -= locked.as_mat() * c.as_mat();
+    }
+    let (v0, _) = orthonormalize(&mut next, basis.subcols(0, 1), n - 1, &mut rng);
+    basis.subcols_mut(1, v0.ncols()).copy_from(&v0);
+    let mut size = 1 + v0.ncols();
+    let mut current = (1, v0.ncols());
     // Ritz checks cost O(size³): start once the basis can hold the wanted pairs plus a block,
     // then space them geometrically (every max(block, size/8) new vectors).
     let mut next_check = want + block;
     loop {
         let (start, width) = current;
         let mut w = op(basis.subcols(start, width).to_owned());
-        // Two passes of block classical Gram-Schmidt against the whole basis.
+        // Block classical Gram-Schmidt against the whole basis, repeated when a column lost
+        // more than `1 − REORTHOGONALIZE_BELOW` of its norm (the DGKS test).
         let q = basis.subcols(0, size);
         let mut coefficients = Mat::<f64>::zeros(size, width);
-        for _ in 0..2 {
+        let before = column_norms(&w);
+        for pass in 0..2 {
             let c = q.transpose() * &w;
             faer::linalg::matmul::matmul(w.as_mut(), Accum::Add, q, &c, -1.0, Par::rayon(0));
             coefficients += &c;
+            let after = column_norms(&w);
+            let kept = before
+                .iter()
+                .zip(&after)
+                .all(|(b, a)| *a >= REORTHOGONALIZE_BELOW * b);
+            if pass == 0 && kept {
+                break;
+            }
         }
+        // Row 0 (along `locked`) is rounding only: the deflated operator has none.
+        coefficients.row_mut(0).fill(0.0);
         projected
             .submatrix_mut(0, start, size, width)
             .copy_from(&coefficients);
@@ -327,6 +371,11 @@ fn block_lanczos(
         current = (size, fresh.ncols());
         size += fresh.ncols();
     }
+}
+
+/// The Euclidean norm of every column of `w`.
+fn column_norms(w: &Mat<f64>) -> Vec<f64> {
+    (0..w.ncols()).map(|j| w.col(j).norm_l2()).collect()
 }
 
 /// `(H + Hᵀ) / 2`.
