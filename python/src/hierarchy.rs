@@ -2,17 +2,14 @@
 //! (`meshgnn_graph::build_hierarchy`, thesis ch. 3.3.4) as numpy arrays and CSR parts, which
 //! `meshgnn.mesh_hierarchy` turns into `scipy.sparse.csr_matrix`.
 
-use std::path::Path;
-
-use meshgnn_geometry::{InputUse, check_input_mesh};
 use meshgnn_graph::{CsrMatrix, HierarchyOptions, build_hierarchy, vertex_adjacency};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::arrays::{index_rows_out, index_vector_out};
-use crate::errors::{geometry_error, value_error};
-use crate::mesh_io::{mesh_in, mesh_out};
+use crate::errors::value_error;
+use crate::mesh_io::{mesh_out, surface_mesh_in};
 
 /// A CSR matrix as `(data float32, indices int32, indptr int64, (rows, cols))`, the
 /// arguments of `scipy.sparse.csr_matrix`.
@@ -36,8 +33,7 @@ pub fn mesh_hierarchy<'py>(
     spiral_lengths: Vec<usize>,
     dilations: Vec<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let template = mesh_in(v, f)?;
-    check_input_mesh(Path::new("V, F"), &template, InputUse::Surface).map_err(geometry_error)?;
+    let template = surface_mesh_in(v, f)?;
     let options = HierarchyOptions {
         factors,
         spiral_lengths,

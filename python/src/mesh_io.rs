@@ -2,10 +2,11 @@
 //! format follows the extension), through the same checked readers and atomic writers as
 //! the command-line tools.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use meshgnn_geometry::{
-    InputUse, PointCloud, TriMesh, read_input_mesh, read_input_point_cloud, write_point_cloud,
+    InputUse, PointCloud, TriMesh, check_input_mesh, read_input_mesh, read_input_point_cloud,
+    write_point_cloud,
 };
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -64,6 +65,14 @@ pub fn mesh_in(v: &Bound<'_, PyAny>, f: &Bound<'_, PyAny>) -> PyResult<TriMesh> 
     let vertices = FloatRows::extract(v, "V", Some(3))?;
     let faces = triangles(f, "F")?;
     TriMesh::new(vertices.points().to_vec(), faces).map_err(|e| value_error("V, F", e))
+}
+
+/// [`mesh_in`] checked to hold a surface (faces of positive area, supported coordinates),
+/// as the apps check a mesh they simplify; errors name `V, F`.
+pub fn surface_mesh_in(v: &Bound<'_, PyAny>, f: &Bound<'_, PyAny>) -> PyResult<TriMesh> {
+    let mesh = mesh_in(v, f)?;
+    check_input_mesh(Path::new("V, F"), &mesh, InputUse::Surface).map_err(geometry_error)?;
+    Ok(mesh)
 }
 
 /// `mesh` as `(V, F)` arrays.

@@ -1,17 +1,14 @@
 //! `simplify`: QEM edge collapse (`meshgnn_graph::decimate`, the engine of `meshsimplify
 //! simplify`) on numpy arrays.
 
-use std::path::Path;
-
-use meshgnn_geometry::{InputUse, check_input_mesh};
 use meshgnn_graph::{DecimationOptions, Target, decimate};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::arrays::index_vector_out;
-use crate::errors::{geometry_error, value_error};
-use crate::mesh_io::{mesh_in, mesh_out};
+use crate::errors::value_error;
+use crate::mesh_io::{mesh_out, surface_mesh_in};
 
 /// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None,
 /// return_vertex_map=False, return_info=False) -> (V', F'[, vertex_map][, info])`: exactly one
@@ -53,8 +50,7 @@ pub fn simplify<'py>(
             "max_error={e}: must be a finite distance >= 0"
         )));
     }
-    let mesh = mesh_in(v, f)?;
-    check_input_mesh(Path::new("V, F"), &mesh, InputUse::Surface).map_err(geometry_error)?;
+    let mesh = surface_mesh_in(v, f)?;
     let target = target(ratio, faces, mesh.face_count())?;
     let options = DecimationOptions {
         target,
