@@ -69,7 +69,7 @@ def chamfer(A: _Floats, B: _Floats, /) -> Dict[str, float]:
     reverse_mean) of the squared nearest-neighbour distances between A and B."""
 
 def point_cloud_metrics(original: _Floats, simplified: _Floats, /, k: int = 16) -> Dict[str, float]:
-    """cd, nc, ce, re, sdm (thesis ch. 5.4), the keys of `pcsimplify eval --json`."""
+    """cd, nc, ce, re, sdm, sdm_nearest (thesis ch. 5.4), the keys of `pcsimplify eval --json`."""
 
 def mesh_metrics(
     V: _Floats,

@@ -36,6 +36,7 @@ pub fn point_cloud_metrics<'py>(
         ("ce", e.ce),
         ("re", e.re),
         ("sdm", e.sdm),
+        ("sdm_nearest", e.sdm_nearest),
     ] {
         out.set_item(key, value)?;
     }

@@ -58,7 +58,7 @@ def test_chamfer_of_a_small_case():
 def test_point_cloud_metrics_rank_fps_above_a_corner(icosphere_path):
     X = meshgnn.read_points(icosphere_path)
     same = meshgnn.point_cloud_metrics(X, X)
-    assert set(same) == {"cd", "nc", "ce", "re", "sdm"} and same["cd"] == 0.0
+    assert set(same) == {"cd", "nc", "ce", "re", "sdm", "sdm_nearest"} and same["cd"] == 0.0
     fps = X[meshgnn.farthest_point_sampling(X, 40)]
     corner = X[np.argsort(X[:, 0])[:40]]
     assert meshgnn.point_cloud_metrics(X, fps)["cd"] < meshgnn.point_cloud_metrics(X, corner)["cd"]

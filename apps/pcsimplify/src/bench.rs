@@ -60,19 +60,32 @@ struct Row {
     ratio: f64,
     points: usize,
     kept: usize,
-    /// `[cd, nc, ce, re, sdm]`.
-    metrics: [f64; 5],
+    /// In the order of [`COLUMNS`].
+    metrics: [f64; 6],
     seconds: f64,
 }
 
-/// Metric names, the factor each is printed multiplied by, and its unit.
-const COLUMNS: [(&str, f64, &str); 5] = [
-    ("CD", 1e4, "×10⁻⁴, squared unit-sphere units"),
-    ("NC", 1.0, "in [0, 2]"),
-    ("CE", 1e2, "×10⁻², dimensionless"),
-    ("RE", 1e2, "×10⁻², dimensionless"),
-    ("SDM", 1e2, "×10⁻², in [0, 1]"),
+/// Metric names, their `--json` keys, the factor each is printed multiplied by, and its unit.
+const COLUMNS: [(&str, &str, f64, &str); 6] = [
+    ("CD", "cd", 1e4, "×10⁻⁴, squared unit-sphere units"),
+    ("NC", "nc", 1.0, "in [0, 2]"),
+    ("CE", "ce", 1e3, "×10⁻³, dimensionless"),
+    ("RE", "re", 1e3, "×10⁻³, dimensionless"),
+    ("SDM", "sdm", 1e4, "×10⁻⁴, in [0, 1] (PC-MSDM)"),
+    (
+        "SDM-nn",
+        "sdm_nearest",
+        1e2,
+        "×10⁻², in [0, 1] (the earlier variant)",
+    ),
 ];
+
+/// `{key: value}` for each metric of [`COLUMNS`], into `object`.
+fn insert_metrics(object: &mut Value, metrics: [f64; 6]) {
+    for ((_, key, _, _), value) in COLUMNS.iter().zip(metrics) {
+        object[*key] = json!(value);
+    }
+}
 
 /// Lists the folder, runs every file, prints the table.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -206,7 +219,7 @@ fn bench_file(
                 ratio,
                 points: n,
                 kept: kept.len(),
-                metrics: [e.cd, e.nc, e.ce, e.re, e.sdm],
+                metrics: [e.cd, e.nc, e.ce, e.re, e.sdm, e.sdm_nearest],
                 seconds: selection.seconds(),
             });
         }
@@ -215,7 +228,7 @@ fn bench_file(
 }
 
 /// Means over files of `(method, ratio)`: `(files, [metrics], seconds)`.
-fn means(rows: &[Row], method: Method, ratio: f64) -> Option<(usize, [f64; 5], f64)> {
+fn means(rows: &[Row], method: Method, ratio: f64) -> Option<(usize, [f64; 6], f64)> {
     let cell: Vec<&Row> = rows
         .iter()
         .filter(|r| r.method == method && r.ratio == ratio)
@@ -224,7 +237,7 @@ fn means(rows: &[Row], method: Method, ratio: f64) -> Option<(usize, [f64; 5], f
         return None;
     }
     let count = cell.len() as f64;
-    let mut metrics = [0.0; 5];
+    let mut metrics = [0.0; 6];
     for r in &cell {
         for (m, v) in metrics.iter_mut().zip(r.metrics) {
             *m += v / count;
@@ -239,23 +252,24 @@ fn to_json(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Value]) 
     for &ratio in &args.ratios {
         for &method in &args.methods {
             if let Some((files, m, seconds)) = means(rows, method, ratio) {
-                results.push(json!({
+                let mut result = json!({
                     "method": method.name(), "ratio": ratio, "files": files,
-                    "cd": m[0], "nc": m[1], "ce": m[2], "re": m[3], "sdm": m[4],
                     "seconds": seconds,
-                }));
+                });
+                insert_metrics(&mut result, m);
+                results.push(result);
             }
         }
     }
     let per_file: Vec<Value> = rows
         .iter()
         .map(|r| {
-            json!({
+            let mut row = json!({
                 "file": r.file, "method": r.method.name(), "ratio": r.ratio,
-                "points": r.points, "kept": r.kept,
-                "cd": r.metrics[0], "nc": r.metrics[1], "ce": r.metrics[2],
-                "re": r.metrics[3], "sdm": r.metrics[4], "seconds": r.seconds,
-            })
+                "points": r.points, "kept": r.kept, "seconds": r.seconds,
+            });
+            insert_metrics(&mut row, r.metrics);
+            row
         })
         .collect();
     json!({
@@ -268,6 +282,7 @@ fn to_json(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Value]) 
             "cd": "squared unit-sphere units (both clouds scaled by the original's centroid and bounding-sphere radius)",
             "nc": "1 - |cos| of PCA normals, in [0, 2]",
             "ce": "dimensionless", "re": "dimensionless", "sdm": "in [0, 1]",
+            "sdm_nearest": "in [0, 1]",
             "seconds": "selection time per file, mean",
             "noise": "σ as a fraction of the bounding-sphere radius",
         },
@@ -289,23 +304,23 @@ fn to_markdown(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Valu
         args.k,
         COLUMNS
             .iter()
-            .map(|(name, _, unit)| format!("{name} {unit}"))
+            .map(|(name, _, _, unit)| format!("{name} {unit}"))
             .collect::<Vec<_>>()
             .join("; ")
     );
-    // Header: one group of five columns per ratio (Table 5.1 layout).
+    // Header: one group of columns per ratio (Table 5.1 layout).
     out.push_str("| method |");
     for ratio in &args.ratios {
-        for (name, _, _) in COLUMNS {
+        for (name, _, _, _) in COLUMNS {
             out.push_str(&format!(" {name} @{ratio} |"));
         }
     }
     out.push_str("\n|---|");
     for _ in &args.ratios {
-        out.push_str("---:|---:|---:|---:|---:|");
+        out.push_str(&"---:|".repeat(COLUMNS.len()));
     }
     out.push('\n');
-    let cells: Vec<Vec<Option<[f64; 5]>>> = args
+    let cells: Vec<Vec<Option<[f64; 6]>>> = args
         .methods
         .iter()
         .map(|&m| {
@@ -318,7 +333,7 @@ fn to_markdown(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Valu
     for (mi, method) in args.methods.iter().enumerate() {
         out.push_str(&format!("| {} |", method.name()));
         for ri in 0..args.ratios.len() {
-            for (c, (_, factor, _)) in COLUMNS.iter().enumerate() {
+            for (c, (_, _, factor, _)) in COLUMNS.iter().enumerate() {
                 let Some(value) = cells[mi][ri].map(|m| m[c]) else {
                     out.push_str(" n/a |");
                     continue;

@@ -68,11 +68,15 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         println!("NC   {:.6}", e.nc);
         println!("CE   {:.6}", e.ce);
         println!("RE   {:.6}", e.re);
-        println!("SDM  {:.6}", e.sdm);
+        println!("SDM  {:.6e}  (PC-MSDM)", e.sdm);
+        println!("SDM-nn {:.6}  (the earlier variant)", e.sdm_nearest);
     }
     Ok(())
 }
 
 fn to_json(e: &PointCloudEvaluation) -> serde_json::Value {
-    json!({ "cd": e.cd, "nc": e.nc, "ce": e.ce, "re": e.re, "sdm": e.sdm })
+    json!({
+        "cd": e.cd, "nc": e.nc, "ce": e.ce, "re": e.re, "sdm": e.sdm,
+        "sdm_nearest": e.sdm_nearest,
+    })
 }

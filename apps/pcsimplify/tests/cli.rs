@@ -44,7 +44,7 @@ fn eval_prints_every_json_key() {
         String::from_utf8_lossy(&out.stderr)
     );
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    for key in ["cd", "nc", "ce", "re", "sdm"] {
+    for key in ["cd", "nc", "ce", "re", "sdm", "sdm_nearest"] {
         let v = json[key]
             .as_f64()
             .unwrap_or_else(|| panic!("missing {key}: {json}"));
@@ -302,7 +302,17 @@ fn bench_prints_every_method_and_ratio_as_markdown_and_json() {
     assert_eq!(json["files"].as_array().unwrap().len(), 3);
     // Same metrics in the saved file (timings differ between runs).
     for (a, b) in results_of(&json).iter().zip(results_of(&saved)) {
-        for key in ["method", "ratio", "files", "cd", "nc", "ce", "re", "sdm"] {
+        for key in [
+            "method",
+            "ratio",
+            "files",
+            "cd",
+            "nc",
+            "ce",
+            "re",
+            "sdm",
+            "sdm_nearest",
+        ] {
             assert_eq!(a[key], b[key], "{key}");
         }
     }
@@ -311,7 +321,7 @@ fn bench_prints_every_method_and_ratio_as_markdown_and_json() {
     for r in results {
         let files = if r["method"] == "qem" { 1 } else { 3 };
         assert_eq!(r["files"], files, "{r}");
-        for key in ["cd", "nc", "ce", "re", "sdm", "seconds"] {
+        for key in ["cd", "nc", "ce", "re", "sdm", "sdm_nearest", "seconds"] {
             let v = r[key].as_f64().unwrap();
             assert!(v.is_finite() && v >= 0.0, "{key} = {v}");
         }

@@ -24,6 +24,7 @@ mod boundary_loops;
 mod connected_components;
 mod cotangent_laplacian;
 mod count_bounds;
+mod curvature_at_scale;
 mod curvature_features;
 mod curvature_neighbourhoods;
 mod degenerate_faces;
@@ -63,6 +64,9 @@ pub use boundary_loops::boundary_loops;
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use cotangent_laplacian::cotangent_laplacian;
 pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};
+pub use curvature_at_scale::{
+    CurvatureAtScale, MAX_SCALE_NEIGHBOURS, VOID_NEIGHBOURS, curvature_at_scale,
+};
 pub use curvature_features::{CurvatureFeatures, curvature_features, curvature_features_with_h};
 pub use curvature_neighbourhoods::curvature_neighbourhoods;
 pub use degenerate_faces::degenerate_faces;

@@ -435,6 +435,82 @@ impl SpatialIndex {
         out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     }
 
+    /// The points within squared distance `radius2` of `q`, thinned evenly to at most `max`:
+    /// when the ball holds `n > max` points, every `⌈n / max⌉`-th of them in slot order (the
+    /// tree's spatial order), so the kept points still span the whole ball. Results go to
+    /// `out` (cleared) as `(squared distance, index)` in slot order. Subtrees whose box lies
+    /// inside the ball are counted and strided without being scanned, so a query costs
+    /// `O(log n + boundary leaves + max)` however many points the ball holds: a fixed-radius
+    /// neighbourhood with a bounded cost (the fixed-scale curvature of `curvature_at_scale`).
+    ///
+    /// ```
+    /// use meshgnn_geometry::SpatialIndex;
+    /// let line: Vec<[f32; 3]> = (0..100).map(|i| [i as f32, 0.0, 0.0]).collect();
+    /// let index = SpatialIndex::new(&line)?;
+    /// let mut out = Vec::new();
+    /// index.within_thinned(&[50.0, 0.0, 0.0], 100.0, 7, &mut out); // 21 points in the ball
+    /// assert_eq!(out.len(), 7);
+    /// let mut xs: Vec<f32> = out.iter().map(|&(_, i)| line[i as usize][0]).collect();
+    /// xs.sort_by(f32::total_cmp);
+    /// assert_eq!(xs, [40.0, 43.0, 46.0, 49.0, 52.0, 55.0, 58.0]); // every third
+    /// # Ok::<(), meshgnn_geometry::Error>(())
+    /// ```
+    pub fn within_thinned(
+        &self,
+        q: &[f32; 3],
+        radius2: f32,
+        max: usize,
+        out: &mut Vec<(f32, u32)>,
+    ) {
+        out.clear();
+        if self.points.is_empty() || max == 0 {
+            return;
+        }
+        let mut count = 0usize;
+        self.visit_ball(0, q, radius2, &mut |slots| count += slots.len());
+        let stride = count.div_ceil(max).max(1);
+        let mut seen = 0usize;
+        self.visit_ball(0, q, radius2, &mut |slots| {
+            // the first slot of this run whose running position is a multiple of `stride`
+            let skip = (stride - seen % stride) % stride;
+            for slot in slots.clone().skip(skip).step_by(stride) {
+                out.push((squared_distance(&self.points[slot], q), self.ids[slot]));
+            }
+            seen += slots.len();
+        });
+    }
+
+    /// Calls `visit` with runs of consecutive slots, in slot order, that together are exactly
+    /// the points of `node`'s subtree within `radius2` of `q`.
+    fn visit_ball(
+        &self,
+        node: usize,
+        q: &[f32; 3],
+        radius2: f32,
+        visit: &mut impl FnMut(std::ops::Range<usize>),
+    ) {
+        let nd = self.nodes[node];
+        if box_squared_distance(q, &nd.lo, &nd.hi) > radius2 || nd.start == nd.end {
+            return;
+        }
+        let (s, e) = (nd.start as usize, nd.end as usize);
+        // The farthest corner: every point of the box is at most this far (monotonic ops).
+        let far = |a: usize| (q[a] - nd.lo[a]).abs().max((nd.hi[a] - q[a]).abs());
+        let (fx, fy, fz) = (far(0), far(1), far(2));
+        if fx * fx + fy * fy + fz * fz <= radius2 {
+            visit(s..e);
+        } else if node >= self.first_leaf {
+            for slot in s..e {
+                if squared_distance(&self.points[slot], q) <= radius2 {
+                    visit(slot..slot + 1);
+                }
+            }
+        } else {
+            self.visit_ball(2 * node + 1, q, radius2, visit);
+            self.visit_ball(2 * node + 2, q, radius2, visit);
+        }
+    }
+
     /// The k-NN graph of the indexed points (thesis eq. 5.4, k = 7; eq. 5.1 neighbourhoods):
     /// for each point its `k` nearest *other* points, `#P×k`, in parallel. Errors when
     /// `k == 0` or `k >= #P`.
@@ -618,6 +694,36 @@ mod tests {
         all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         all.truncate(k);
         all
+    }
+
+    #[test]
+    fn thinned_ball_is_the_ball_or_an_even_subset_of_it() {
+        let points = cloud_with_ties(5, 5000);
+        let index = SpatialIndex::new(&points).unwrap();
+        let mut rng = StdRng::seed_from_u64(6);
+        let (mut all, mut thin) = (Vec::new(), Vec::new());
+        for _ in 0..200 {
+            let q: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.2f32..1.2));
+            let r2 = rng.random_range(0.0f32..0.2);
+            let max = rng.random_range(1usize..300);
+            index.within(&q, r2, None, &mut all);
+            index.within_thinned(&q, r2, max, &mut thin);
+            thin.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            if all.len() <= max {
+                assert_eq!(thin, all);
+            } else {
+                // ⌈n / stride⌉ points with stride ⌈n / max⌉: at most max, more than max / 2
+                assert!(
+                    thin.len() <= max && 2 * thin.len() > max,
+                    "{} of {max}",
+                    thin.len()
+                );
+                assert!(thin.iter().all(|t| {
+                    all.binary_search_by(|a| a.0.total_cmp(&t.0).then(a.1.cmp(&t.1)))
+                        .is_ok()
+                }));
+            }
+        }
     }
 
     /// Uniform points, a quarter of them copies of earlier ones, a third on a coarse grid.

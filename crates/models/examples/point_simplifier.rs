@@ -31,8 +31,8 @@ fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
 
 fn print_metrics(name: &str, e: &PointCloudEvaluation) {
     println!(
-        "  {name:<22} CD {:.3e}  NC {:.4}  CE {:.4}  RE {:.4}  SDM {:.4}",
-        e.cd, e.nc, e.ce, e.re, e.sdm
+        "  {name:<22} CD {:.3e}  NC {:.4}  CE {:.3e}  RE {:.3e}  SDM {:.3e}  SDM-nn {:.4}",
+        e.cd, e.nc, e.ce, e.re, e.sdm, e.sdm_nearest
     );
 }
 

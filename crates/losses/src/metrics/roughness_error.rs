@@ -1,13 +1,13 @@
 //! Roughness error RE (thesis ch. 5.4): eq. 5.8 with roughness `R = |κ − K̄|` in place of the
-//! mean curvature.
+//! mean curvature, on the same footing as CE ([`super::matched_scale_curvature`]).
 
 use crate::Result;
-use crate::metrics::curvature_error::features_for;
-use crate::metrics::nearest_value_error::nearest_value_error;
+use crate::metrics::matched_scale_curvature::{matched_scale_curvature, rms_difference};
 
-/// RE: `( mean_{x∈P1} (R_1(x) − R_2(NN(x, P2)))² )^{1/2}` for `original: #P1×3` and
-/// `simplified: #P2×3`, roughness from the geometry crate's `curvature_features` with `k`
-/// neighbours on each cloud. Dimensionless, like the curvature of eq. 5.2.
+/// RE: `( mean_{q∈R} (R_1(q) − R_2(q))² )^{1/2}` for `original: #P1×3` and
+/// `simplified: #P2×3`, both roughness fields at the original's reference points and the
+/// kernel radius that holds `k` simplified points. Dimensionless, like the curvature of
+/// eq. 5.2.
 ///
 /// ```
 /// use meshgnn_geometry::icosphere;
@@ -17,10 +17,9 @@ use crate::metrics::nearest_value_error::nearest_value_error;
 /// # Ok::<(), meshgnn_losses::Error>(())
 /// ```
 pub fn roughness_error(original: &[[f32; 3]], simplified: &[[f32; 3]], k: usize) -> Result<f64> {
-    let (a, b) = rayon::join(
-        || features_for("original points", original, k),
-        || features_for("simplified points", simplified, k),
-    );
-    let (a, b) = (a?, b?);
-    nearest_value_error(original, &a.roughness, simplified, &b.roughness)
+    let m = matched_scale_curvature(original, simplified, k, 1.0)?;
+    Ok(rms_difference(
+        &m.original_at_reference.roughness,
+        &m.simplified_at_reference.roughness,
+    ))
 }
