@@ -92,7 +92,7 @@ pub fn curvature_at_scale(
     let index = SpatialIndex::new(cloud)?;
     let kernel = Kernel {
         index: &index,
-        radius2: radius * radius,
+        radius,
     };
     let own: Vec<f32> = cloud
         .par_iter()
@@ -120,25 +120,49 @@ pub fn curvature_at_scale(
     })
 }
 
+/// The neighbourhood of the location `q` in the indexed cloud for the kernel of radius `radius`
+/// (module docs): `(squared distance, index)` into `hood`, in the index's slot order. The
+/// differentiable loss `meshgnn_losses::losses::mean_curvature_at_scale` takes its
+/// neighbourhoods from this one function, so loss and metric agree by construction.
+///
+/// ```
+/// use meshgnn_geometry::{SpatialIndex, kernel_neighbourhood};
+/// let line: Vec<[f32; 3]> = (0..20).map(|i| [i as f32, 0.0, 0.0]).collect();
+/// let index = SpatialIndex::new(&line)?;
+/// let mut hood = Vec::new();
+/// kernel_neighbourhood(&index, &[10.0, 0.0, 0.0], 3.0, &mut hood); // within 2ρ = 6
+/// assert_eq!(hood.len(), 13);
+/// kernel_neighbourhood(&index, &[100.0, 0.0, 0.0], 3.0, &mut hood); // a void: 8 nearest
+/// assert_eq!(hood.len(), 8);
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn kernel_neighbourhood(
+    index: &SpatialIndex,
+    q: &[f32; 3],
+    radius: f64,
+    hood: &mut Vec<(f32, u32)>,
+) {
+    let cut = (4.0 * radius * radius) as f32;
+    index.within_thinned(q, cut, MAX_SCALE_NEIGHBOURS, hood);
+    if hood.len() < VOID_NEIGHBOURS {
+        index.nearest(q, VOID_NEIGHBOURS, None, hood);
+    }
+}
+
 /// The Gaussian kernel of one radius over one indexed cloud.
 struct Kernel<'a> {
     index: &'a SpatialIndex,
-    radius2: f64,
+    radius: f64,
 }
 
 impl Kernel<'_> {
     /// The neighbourhood of `q` as `(weight, index)` into `hood` (module docs).
     fn neighbourhood(&self, q: &[f32; 3], hood: &mut Vec<(f32, u32)>) {
-        let cut = (4.0 * self.radius2) as f32;
-        self.index
-            .within_thinned(q, cut, MAX_SCALE_NEIGHBOURS, hood);
-        if hood.len() < VOID_NEIGHBOURS {
-            self.index.nearest(q, VOID_NEIGHBOURS, None, hood);
-        }
+        kernel_neighbourhood(self.index, q, self.radius, hood);
         let nearest = hood.iter().map(|n| n.0).fold(f32::INFINITY, f32::min);
-        let nearest = f64::from(nearest);
+        let (nearest, radius2) = (f64::from(nearest), self.radius * self.radius);
         for n in hood.iter_mut() {
-            n.0 = (-(f64::from(n.0) - nearest) / self.radius2).exp() as f32;
+            n.0 = (-(f64::from(n.0) - nearest) / radius2).exp() as f32;
         }
     }
 
@@ -226,7 +250,7 @@ mod tests {
         let index = SpatialIndex::new(&cloud).unwrap();
         let kernel = Kernel {
             index: &index,
-            radius2: 10.0,
+            radius: 10f64.sqrt(),
         };
         let hood: Vec<(f32, u32)> = (0..5).map(|j| (1.0, j)).collect();
         let kappa = kernel.curvature(&cloud, &hood);

@@ -1,8 +1,8 @@
 //! The neighbourhoods `N_i` of the curvature operators of thesis section 5.3.1 (eq. 5.1-5.3):
-//! the `k` nearest points of every point other than itself, from [`SpatialIndex`]. The metric
-//! ([`crate::curvature_features`], [`crate::pca_normals_and_curvature`]) and the
-//! differentiable loss `meshgnn_losses::losses::mean_curvature` both take their neighbourhoods
-//! from this one function, so they agree by construction.
+//! the `k` nearest points of every point other than itself, from [`SpatialIndex`]. The
+//! features [`crate::curvature_features`] and [`crate::pca_normals_and_curvature`] both take
+//! their neighbourhoods from this one function, so they agree by construction. (The fair
+//! metrics and their loss use [`crate::kernel_neighbourhood`] instead: one physical radius.)
 //!
 //! # Conventions
 //! The neighbourhood `N_i` of eq. 5.1 is the `k` nearest points *other than* `p_i` (the point

@@ -66,6 +66,7 @@ pub use cotangent_laplacian::cotangent_laplacian;
 pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};
 pub use curvature_at_scale::{
     CurvatureAtScale, MAX_SCALE_NEIGHBOURS, VOID_NEIGHBOURS, curvature_at_scale,
+    kernel_neighbourhood,
 };
 pub use curvature_features::{CurvatureFeatures, curvature_features, curvature_features_with_h};
 pub use curvature_neighbourhoods::curvature_neighbourhoods;

@@ -7,7 +7,7 @@ mod curvature_preservation;
 mod edge_crossings;
 mod face_penalty;
 mod gradient_check;
-mod mean_curvature;
+mod mean_curvature_at_scale;
 mod probabilistic_chamfer;
 mod probabilistic_surface_distance;
 mod reconstruction_l1;
@@ -22,7 +22,7 @@ pub use chamfer_loss::chamfer_loss;
 pub use curvature_preservation::curvature_preservation;
 pub use edge_crossings::edge_crossings;
 pub use gradient_check::{GradientDisagreement, gradient_disagreement};
-pub use mean_curvature::mean_curvature;
+pub use mean_curvature_at_scale::mean_curvature_at_scale;
 pub use probabilistic_chamfer::probabilistic_chamfer;
 pub use probabilistic_surface_distance::{
     ReverseSurfaceParams, probabilistic_surface_forward, probabilistic_surface_reverse,

@@ -92,14 +92,10 @@ pub fn matched_scale_curvature(
             message: format!("the kernel needs at least 2 points, got {k}"),
         });
     }
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "scale",
-            message: format!("must be positive and finite, got {scale}"),
-        });
-    }
-    let reference = reference_subset(original, simplified.len());
-    let radius = scale * kernel_radius(&reference, simplified.len(), k)?;
+    let CurvatureReference {
+        points: reference,
+        radius,
+    } = curvature_reference(original, simplified.len(), k, scale)?;
     let queries: Vec<[f32; 3]> = reference.iter().chain(simplified).copied().collect();
     let (of_original, of_simplified) = rayon::join(
         || curvature_at_scale(&reference, &queries, radius),
@@ -123,6 +119,57 @@ pub fn matched_scale_curvature(
         original_at_simplified,
         simplified_at_simplified,
     })
+}
+
+/// The original's side of the comparison: its reference points `R` and the kernel radius `ρ`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurvatureReference {
+    /// `R`, `#R×3` (module docs).
+    pub points: Vec<[f32; 3]>,
+    /// `ρ` times the requested scale.
+    pub radius: f64,
+}
+
+/// `R` and `ρ` (module docs) for comparing `original: #P1×3` with a cloud of
+/// `simplified_count` points, `k` simplified points per radius, the radius multiplied by
+/// `scale`: what both the metrics and the training loss (eq. 5.8 at one scale) start from.
+/// Fails on fewer than 3 original points or 0 simplified ones, `k < 2` or a `scale` that is
+/// not positive and finite.
+///
+/// ```
+/// use meshgnn_geometry::icosphere;
+/// use meshgnn_losses::metrics::curvature_reference;
+/// let p = icosphere(4).vertices().to_vec(); // 2 562 points
+/// let r = curvature_reference(&p, 100, 16, 1.0)?;
+/// assert_eq!(r.points.len(), 800); // 8 × 100
+/// assert!(r.radius > 0.2 && r.radius < 0.5); // 16 of 100 points on a unit sphere
+/// # Ok::<(), meshgnn_losses::Error>(())
+/// ```
+pub fn curvature_reference(
+    original: &[[f32; 3]],
+    simplified_count: usize,
+    k: usize,
+    scale: f64,
+) -> Result<CurvatureReference> {
+    check_points("original points", original)?;
+    if original.len() < 3 || simplified_count == 0 || k < 2 {
+        return Err(Error::InvalidParameter {
+            name: "curvature reference",
+            message: format!(
+                "needs 3 original points, 1 simplified and k >= 2, got {}, {simplified_count} and {k}",
+                original.len()
+            ),
+        });
+    }
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "scale",
+            message: format!("must be positive and finite, got {scale}"),
+        });
+    }
+    let points = reference_subset(original, simplified_count);
+    let radius = scale * kernel_radius(&points, simplified_count, k)?;
+    Ok(CurvatureReference { points, radius })
 }
 
 /// `( mean_q (a(q) − b(q))² )^{1/2}`: eq. 5.8's RMS of a field difference at shared locations.

@@ -22,7 +22,8 @@ pub use curvature_error::curvature_error;
 pub use hausdorff::hausdorff_distance;
 pub use laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};
 pub use matched_scale_curvature::{
-    MatchedScaleCurvature, REFERENCE_OVERSAMPLING, REFERENCE_SEED, matched_scale_curvature,
+    CurvatureReference, MatchedScaleCurvature, REFERENCE_OVERSAMPLING, REFERENCE_SEED,
+    curvature_reference, matched_scale_curvature,
 };
 pub use mesh_evaluation::{
     MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation,

@@ -26,7 +26,9 @@ pub use point_simplifier::{
     PointSimplifier, PointSimplifierConfig, SimplifierOutput, StageTimings,
 };
 pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_indexed};
-pub use simplifier_loss::{CURVATURE_LOSS_WEIGHT, SimplifierLoss, simplifier_loss};
+pub use simplifier_loss::{
+    CURVATURE_LOSS_WEIGHT, CurvatureTarget, SimplifierLoss, simplifier_loss,
+};
 pub use simplifier_training::{
     SimplifierObjective, SimplifierTraining, TrainingSample, VALIDATION_RATIOS,
     prepare_training_sample,

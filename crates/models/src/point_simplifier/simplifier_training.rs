@@ -19,11 +19,11 @@ use candle_core::{DType, Device, Tensor, Var};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::{curvature_features, unit_sphere_normalization};
 use meshgnn_graph::knn_graph;
-use meshgnn_losses::losses::{adaptive_chamfer_weights, mean_curvature};
+use meshgnn_losses::losses::adaptive_chamfer_weights;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
 use super::{
-    LatentSamplingOptions, NeighbourIndex, POINT_SIMPLIFIER_NAME, PointSimplifier,
+    CurvatureTarget, LatentSamplingOptions, NeighbourIndex, POINT_SIMPLIFIER_NAME, PointSimplifier,
     PointSimplifierConfig, simplifier_loss,
 };
 use crate::adam::sorted_vars;
@@ -44,7 +44,8 @@ pub struct SimplifierObjective {
     pub curvature_weight: f64,
     /// Temperature τ of the adaptive Chamfer weights (10).
     pub tau: f32,
-    /// Neighbours of the curvature estimate eq. 5.1-5.3 (16, as the evaluation).
+    /// `k` of the curvature estimates, as the evaluation's (16): neighbours of the adaptive
+    /// weights' `K̄` on the original, simplified points per kernel radius of `E_c`.
     pub curvature_neighbours: usize,
 }
 
@@ -99,8 +100,6 @@ pub struct TrainingSample {
     pub graph: NeighbourIndex,
     /// `points` as a tensor `(N, 3)`.
     pub positions: Tensor,
-    /// Mean curvature K̄ (eq. 5.3), `(N)`.
-    pub curvature: Tensor,
     /// Adaptive Chamfer weights (eq. 5.7), `(N)`.
     pub weights: Tensor,
 }
@@ -136,7 +135,6 @@ pub fn prepare_training_sample(
         NeighbourIndex::from_knn(&knn_graph(&unit, model.gnn_neighbours.min(n - 1))?, &device)?;
     Ok(TrainingSample {
         positions: Tensor::from_slice(unit.as_flattened(), (n, 3), &device)?,
-        curvature: Tensor::from_slice(&features.mean_curvature, n, &device)?,
         weights: Tensor::from_vec(weights, n, &device)?,
         points: unit,
         graph,
@@ -198,18 +196,16 @@ impl SimplifierTraining {
         let out = self
             .model
             .forward(&sample.points, &sample.graph, target, exact, seed, train)?;
-        let k2 = simplified_curvature(
-            sample,
-            &out.points,
-            &out.indices,
+        let curvature = CurvatureTarget::new(
+            &sample.points,
+            out.indices.len(),
             self.objective.curvature_neighbours,
         )?;
         Ok(simplifier_loss(
             &sample.positions,
             &sample.weights,
-            &sample.curvature,
             &out.points,
-            &k2,
+            &curvature,
             self.objective.curvature_weight,
         )?
         .total)
@@ -326,23 +322,6 @@ impl Trainable for SimplifierTraining {
         }
         Ok(())
     }
-}
-
-/// `K̄_2` of eq. 5.8: the mean curvature of the simplified cloud `points: (M, 3)` itself
-/// (eq. 5.1-5.3 with `k` neighbours, differentiable in the positions, so the curvature term
-/// trains AttRef and, through the embeddings it reads, the projector). Fewer than 3 kept points
-/// have no curvature of their own; the input's `K̄` at the kept `indices` stands in.
-fn simplified_curvature(
-    sample: &TrainingSample,
-    points: &Tensor,
-    indices: &[u32],
-    k: usize,
-) -> Result<Tensor> {
-    if indices.len() >= 3 {
-        return Ok(mean_curvature(points, k)?);
-    }
-    let idx = Tensor::from_slice(indices, indices.len(), &Device::Cpu)?;
-    Ok(sample.curvature.index_select(&idx, 0)?)
 }
 
 #[cfg(test)]
