@@ -142,7 +142,8 @@ pub struct CurvatureReference {
 /// let p = icosphere(4).vertices().to_vec(); // 2 562 points
 /// let r = curvature_reference(&p, 100, 16, 1.0)?;
 /// assert_eq!(r.points.len(), 800); // 8 × 100
-/// assert!(r.radius > 0.2 && r.radius < 0.5); // 16 of 100 points on a unit sphere
+/// // a uniform 100 on the unit sphere hold 16 within ρ: πρ² · 100 / 4π = 16, ρ² = 0.64
+/// assert!((r.radius * r.radius / 0.64 - 1.0).abs() < 0.05);
 /// # Ok::<(), meshgnn_losses::Error>(())
 /// ```
 pub fn curvature_reference(
