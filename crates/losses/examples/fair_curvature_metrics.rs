@@ -10,7 +10,8 @@
 //! Shapes: an ellipsoid (semi-axes 1.6, 1, 0.7), the subdivided cube, and every mesh given.
 //! Each is sampled with 100k area-weighted points twice (seeds 1 and 4: the spread between two
 //! samplings of one density) and with 1M (seed 2); 5k and 1k points are kept by random
-//! (seed 3), FPS (first point 0) and TCP (top K̄, k = 16). One line per case: the metrics at
+//! (seed 3), FPS (first point 0) and TCP (top K̄, k = 16), and 5% of the 1M (50k, the same
+//! ratio as 100k → 5k) by random and FPS. One line per case: the metrics at
 //! kernel scales 1, 0.5 and 2, the earlier variants, the seconds of one evaluation and of its
 //! curvature fields alone.
 
@@ -74,17 +75,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for (n, seed) in [(100_000usize, 1u64), (100_000, 4), (1_000_000, 2)] {
             let cloud = sample_surface(mesh, n, seed)?.points;
             let k_bar = curvature_features(&cloud, 16)?.mean_curvature;
-            for m in [5_000usize, 1_000] {
+            let same_ratio = (n > 100_000).then_some(n / 20);
+            for m in same_ratio.into_iter().chain([5_000usize, 1_000]) {
                 let mut rng = StdRng::seed_from_u64(3);
                 let mut random = sample(&mut rng, n, m).into_vec();
                 random.sort_unstable();
                 let fps = fast_farthest_point_sampling(&cloud, m, FpsStart::Index(0))?;
                 let tcp = top_curvature_sampling(&k_bar, m)?;
-                for (method, kept) in [
+                let mut methods = vec![
                     ("random", picked(&cloud, random)),
                     ("fps", picked(&cloud, fps.iter().map(|&i| i as usize))),
-                    ("tcp", picked(&cloud, tcp.iter().map(|&i| i as usize))),
-                ] {
+                ];
+                if Some(m) != same_ratio {
+                    methods.push(("tcp", picked(&cloud, tcp.iter().map(|&i| i as usize))));
+                }
+                for (method, kept) in methods {
                     let start = Instant::now();
                     let e = point_cloud_evaluation(&cloud, &kept, 16)?;
                     let seconds = start.elapsed().as_secs_f64();
