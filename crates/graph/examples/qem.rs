@@ -11,7 +11,8 @@
 //! deterministic bumps. Distances: every mesh is sampled on a barycentric lattice of spacing
 //! `sqrt(area / 2·10⁶)`; the symmetric Hausdorff and Chamfer distances (mean nearest-sample
 //! distance, summed over both directions) are reported relative to the input's bounding-box
-//! diagonal. `--density K` (default 4) samples `K` times more densely (spacing `/ sqrt(K)`):
+//! diagonal, with the mean squared distance (both directions averaged) relative to the
+//! diagonal squared. `--faces N` asks for N faces instead of a ratio. `--density K` (default 4) samples `K` times more densely (spacing `/ sqrt(K)`):
 //! at `K = 1` the 1.31M-face input's faces (longest edge < 3 spacings) get no interior lattice
 //! point, so its samples are its vertices alone, and an output whose vertices are input
 //! vertices (meshoptimizer) gets distance 0 on all of them (docs/qem.md, "Chamfer at 10%").
@@ -39,10 +40,22 @@ fn bumpy_sphere(subdivisions: u32) -> Result<TriMesh, meshgnn_geometry::Error> {
     sphere.with_vertices(vertices)
 }
 
-/// Lattice samples of every face, spacing `h`, plus the vertices.
+/// Lattice samples of every face, spacing `h`, plus the vertices. A face listed again (the
+/// same three vertices) is sampled once: the distance is between surfaces, and a surface
+/// listed twice is not twice as much surface.
 fn samples(vertices: &[[f32; 3]], triangles: &[[u32; 3]], h: f64) -> Vec<[f32; 3]> {
     let mut out: Vec<[f32; 3]> = vertices.to_vec();
-    let per_face: Vec<Vec<[f32; 3]>> = triangles
+    let mut seen = std::collections::HashSet::new();
+    let distinct: Vec<[u32; 3]> = triangles
+        .iter()
+        .filter(|t| {
+            let mut key = **t;
+            key.sort_unstable();
+            seen.insert(key)
+        })
+        .copied()
+        .collect();
+    let per_face: Vec<Vec<[f32; 3]>> = distinct
         .par_iter()
         .map(|t| {
             let p = t.map(|v| vertices[v as usize].map(f64::from));
@@ -70,8 +83,11 @@ fn samples(vertices: &[[f32; 3]], triangles: &[[u32; 3]], h: f64) -> Vec<[f32; 3
     out
 }
 
-/// (max, mean) distance from each point of `from` to its nearest point of `to`.
-fn one_sided(from: &[[f32; 3]], to: &[[f32; 3]]) -> Result<(f64, f64), meshgnn_geometry::Error> {
+/// (max, mean, mean squared) distance from each point of `from` to its nearest point of `to`.
+fn one_sided(
+    from: &[[f32; 3]],
+    to: &[[f32; 3]],
+) -> Result<(f64, f64, f64), meshgnn_geometry::Error> {
     let index = SpatialIndex::new(to)?;
     let d: Vec<f64> = from
         .par_iter()
@@ -83,7 +99,9 @@ fn one_sided(from: &[[f32; 3]], to: &[[f32; 3]]) -> Result<(f64, f64), meshgnn_g
         })
         .collect();
     let max = d.iter().copied().fold(0.0, f64::max);
-    Ok((max, d.iter().sum::<f64>() / d.len().max(1) as f64))
+    let n = d.len().max(1) as f64;
+    let mean_squared = d.iter().map(|x| x * x).sum::<f64>() / n;
+    Ok((max, d.iter().sum::<f64>() / n, mean_squared))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -96,16 +114,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("wrote {out}: {} faces", mesh.face_count());
         return Ok(());
     }
-    let input = args.first().ok_or("usage: qem IN --ratio R [--meshopt]")?;
-    let ratio: f64 = args
-        .iter()
-        .position(|a| a == "--ratio")
-        .and_then(|i| args.get(i + 1))
-        .ok_or("missing --ratio R")?
-        .parse()?;
+    let input = args
+        .first()
+        .ok_or("usage: qem IN (--ratio R | --faces N) [--meshopt]")?;
+    let value = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+    };
     let use_meshopt = args.iter().any(|a| a == "--meshopt");
     let mesh = read_mesh(input)?;
-    let target = (ratio * mesh.face_count() as f64).round() as usize;
+    let target = match (value("--ratio"), value("--faces")) {
+        (Some(r), _) => (r.parse::<f64>()? * mesh.face_count() as f64).round() as usize,
+        (None, Some(n)) => n.parse()?,
+        (None, None) => return Err("missing --ratio R or --faces N".into()),
+    };
 
     let start = Instant::now();
     let (out_vertices, out_triangles, method) = if use_meshopt {
@@ -196,8 +219,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.extend(used);
         s
     };
-    let (ab_max, ab_mean) = one_sided(&a, &b)?;
-    let (ba_max, ba_mean) = one_sided(&b, &a)?;
+    let (ab_max, ab_mean, ab_squared) = one_sided(&a, &b)?;
+    let (ba_max, ba_mean, ba_squared) = one_sided(&b, &a)?;
     let (lo, hi) = mesh
         .vertices()
         .iter()
@@ -212,11 +235,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .sum::<f64>()
         .sqrt();
     println!(
-        "{{\"method\": \"{method}\", \"input_faces\": {}, \"output_faces\": {}, \"seconds\": {seconds:.4}, \"hausdorff_rel\": {:.3e}, \"chamfer_rel\": {:.3e}}}",
+        "{{\"method\": \"{method}\", \"input_faces\": {}, \"output_faces\": {}, \"seconds\": {seconds:.4}, \"hausdorff_rel\": {:.3e}, \"chamfer_rel\": {:.3e}, \"mean_squared_rel\": {:.3e}}}",
         mesh.face_count(),
         out_triangles.len(),
         ab_max.max(ba_max) / diag,
         (ab_mean + ba_mean) / diag,
+        0.5 * (ab_squared + ba_squared) / (diag * diag),
     );
     Ok(())
 }

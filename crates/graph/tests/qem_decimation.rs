@@ -340,6 +340,70 @@ fn uv_seam_vertices_stay_in_place() {
     }
 }
 
+/// Three bumped 16 × 16 pages bound along a spine on the z axis (each spine edge has three
+/// faces), the first page listed twice, the copy with the opposite orientation (as scans hold
+/// doubled sheets).
+fn book_of_three_pages() -> TriMesh {
+    let grid = grid_plane(16, 16);
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for page in 0..3 {
+        let angle = page as f32 * std::f32::consts::TAU / 3.0;
+        let (sin, cos) = angle.sin_cos();
+        let offset = vertices.len() as u32;
+        vertices.extend(grid.vertices().iter().map(|&[u, v, _]| {
+            if u == 0.0 {
+                return [0.0, 0.0, v];
+            }
+            let bump = 0.05 * (std::f32::consts::PI * u).sin() * (std::f32::consts::PI * v).sin();
+            [u * cos - bump * sin, u * sin + bump * cos, v]
+        }));
+        triangles.extend(grid.triangles().iter().map(|t| t.map(|v| v + offset)));
+    }
+    let first_page = grid.triangles().len();
+    triangles.extend_from_within(..first_page);
+    for t in &mut triangles[3 * first_page..] {
+        t.swap(1, 2);
+    }
+    TriMesh::new(vertices, triangles).unwrap()
+}
+
+#[test]
+fn non_manifold_spine_collapses_along_itself_and_never_gets_worse() {
+    let mesh = book_of_three_pages();
+    assert_eq!(mesh.face_count(), 4 * 512);
+    // Each page keeps at least the triangles from its spine vertices to its far side: 16 per
+    // page while the 17 spine vertices stay, so 30 faces need collapses along the spine.
+    let out = decimate(&mesh, &options(Target::Faces(30))).unwrap();
+    assert_eq!(out.stop_reason, StopReason::TargetReached);
+    assert!(out.mesh.face_count() <= 30, "{}", out.mesh.face_count());
+    let mut faces_per_edge: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut distinct = std::collections::HashSet::new();
+    for t in out.mesh.triangles() {
+        let mut key = *t;
+        key.sort_unstable();
+        assert!(distinct.insert(key), "duplicate face {t:?}");
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *faces_per_edge.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    // The pages stay bound: the spine still has edges with three faces, none has more, and
+    // every such edge lies on the spine.
+    let v = out.mesh.vertices();
+    let spine: Vec<_> = faces_per_edge.iter().filter(|(_, c)| **c > 2).collect();
+    assert!(!spine.is_empty());
+    for (&(a, b), &count) in spine {
+        assert_eq!(count, 3, "edge ({a}, {b}) has {count} faces");
+        for p in [v[a as usize], v[b as usize]] {
+            assert!(
+                p[0].abs() < 1e-6 && p[1].abs() < 1e-6,
+                "{p:?} left the spine"
+            );
+        }
+    }
+}
+
 #[test]
 fn keep_original_positions_places_vertices_on_inputs() {
     let mesh = noisy_sphere(3, 0.05);

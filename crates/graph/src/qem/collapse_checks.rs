@@ -32,6 +32,29 @@ fn common_count(x: &[u32], y: &[u32]) -> usize {
     x.iter().filter(|v| y.contains(v)).count()
 }
 
+/// The link condition where `a` or `b` lies on a non-manifold edge, stated on face counts
+/// (`fan_a`, `ring_a`: the faces and neighbours of `a`, without `b`; likewise for `b`):
+/// every common neighbour `x` is the apex of a face on `(a, b)`, and the edge `(x, survivor)`
+/// that `(a, x)` and `(b, x)` merge into ends with at most `max(2, n_ax, n_bx)` faces
+/// (`n_ax + n_bx − 2·n_abx`), so no edge becomes non-manifold and none becomes more so.
+fn edge_face_counts_kept(
+    b: u32,
+    fan_a: &[[u32; 3]],
+    fan_b: &[[u32; 3]],
+    ring_a: &[u32],
+    ring_b: &[u32],
+) -> bool {
+    ring_a.iter().filter(|x| ring_b.contains(x)).all(|&x| {
+        let count = |fan: &[[u32; 3]]| fan.iter().filter(|f| f.contains(&x)).count();
+        let (n_ax, n_bx) = (count(fan_a), count(fan_b));
+        let n_abx = fan_a
+            .iter()
+            .filter(|f| f.contains(&x) && f.contains(&b))
+            .count();
+        n_abx > 0 && n_ax + n_bx - 2 * n_abx <= n_ax.max(n_bx).max(2)
+    })
+}
+
 /// Reusable buffers of [`Collapser::collapse_allowed`] (one per thread), holding after a call
 /// the neighbours the check read: its *footprint*.
 #[derive(Debug, Default)]
@@ -78,7 +101,9 @@ impl Collapser {
     ///
     /// Rejected when: the common neighbours of `a` and `b` are not exactly the apexes of their
     /// shared faces (the link condition: a pinched vertex or edge would appear); an interior
-    /// edge joins two boundary vertices (it would pinch the boundary); the two fans hold
+    /// edge joins two boundary vertices (it would pinch the boundary); around a non-manifold
+    /// vertex, an edge would end with more faces than it and its merged twin had (or than 2),
+    /// or two such vertices would merge other than along a non-manifold edge; the two fans hold
     /// opposite edges `(x, y)` (duplicate faces); `a` and `b` are all their component has
     /// left; or a moved face turns by more than `acos(MIN_NORMAL_COS)`, leaves the input
     /// surface its corners stand for by more than `acos(MIN_REGION_COS)`, or degenerates.
@@ -115,13 +140,20 @@ impl Collapser {
         pairs: &mut Vec<[u32; 2]>,
     ) -> bool {
         let shared = fan_b.iter().filter(|f| f.contains(&a)).count();
-        if shared == 0 || shared > 2 || fan_a.len() + fan_b.len() == 2 * shared {
+        let (va, vb) = (self.verts[a as usize], self.verts[b as usize]);
+        if shared == 0 || fan_a.len() + fan_b.len() == 2 * shared {
             return false;
         }
-        if common_count(ring_a, ring_b) != shared {
+        if va.non_manifold() || vb.non_manifold() {
+            if !edge_face_counts_kept(b, fan_a, fan_b, ring_a, ring_b)
+                || (va.non_manifold() && vb.non_manifold() && shared < 3)
+            {
+                return false;
+            }
+        } else if shared > 2 || common_count(ring_a, ring_b) != shared {
             return false;
         }
-        if shared == 2 && self.verts[a as usize].boundary() && self.verts[b as usize].boundary() {
+        if shared == 2 && va.boundary() && vb.boundary() {
             return false;
         }
         // Duplicate faces: an opposite edge present around both a and b.
@@ -137,10 +169,7 @@ impl Collapser {
             }
         }
         // Flips, folds and degenerate faces around both ends.
-        let (ra, rb) = (
-            self.verts[a as usize].region_normal,
-            self.verts[b as usize].region_normal,
-        );
+        let (ra, rb) = (va.region_normal, vb.region_normal);
         let merged_region: [f64; 3] = std::array::from_fn(|k| f64::from(ra[k] + rb[k]));
         let p = p.map(f64::from);
         for (moving, other, fan) in [(a, b, fan_a), (b, a, fan_b)] {

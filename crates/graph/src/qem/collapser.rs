@@ -21,17 +21,21 @@ use crate::error::{Error, Result};
 
 /// Marks a dead face (`faces[f] = [DEAD; 3]`).
 pub(crate) const DEAD: u32 = u32::MAX;
-/// Vertex flag: never moved or removed (non-manifold edge or UV seam).
+/// Vertex flag: never moved or removed (a UV seam: one position, several UVs).
 pub(crate) const LOCKED: u32 = 1;
 /// Vertex flag: on the input's open boundary.
 pub(crate) const BOUNDARY: u32 = 2;
 /// Vertex flag: removed by a collapse.
 const REMOVED: u32 = 4;
+/// Vertex flag: on an edge with three or more faces. Such a vertex stays where it is and is
+/// removed only along a non-manifold edge, by the checks of `collapse_checks.rs` that keep
+/// every edge's face count from growing.
+pub(crate) const NON_MANIFOLD: u32 = 8;
 /// The flags' bits of [`VertexRecord::meta`]; the incidence list length is stored above them.
-const FLAG_BITS: u32 = 3;
+const FLAG_BITS: u32 = 4;
 /// The largest supported face count: incidence offsets are `u32` (`refs` stays below
 /// `4 · #F + 1024` plus one fan) and a vertex's face count fits in `32 − FLAG_BITS` bits.
-const MAX_FACES: usize = 500_000_000;
+const MAX_FACES: usize = 250_000_000;
 /// Vertices per parallel task of the setup's edge enumeration.
 const EDGE_CHUNK: usize = 2048;
 
@@ -62,6 +66,10 @@ impl VertexRecord {
 
     pub(crate) fn boundary(&self) -> bool {
         self.meta & BOUNDARY != 0
+    }
+
+    pub(crate) fn non_manifold(&self) -> bool {
+        self.meta & NON_MANIFOLD != 0
     }
 
     /// The range of `refs` holding the incident faces.
@@ -127,7 +135,7 @@ pub(crate) struct Collapser {
     colors: Option<Vec<[f32; 3]>>,
     weld_map: Vec<u32>,
     welded: bool,
-    /// The setup's edges (manifold ones), scored in the first pass.
+    /// The setup's edges, scored in the first pass.
     pub initial_edges: Vec<(u32, u32)>,
     scratch_faces: Vec<u32>,
     pub max_cost: f64,
@@ -158,7 +166,7 @@ impl Collapser {
             .par_iter()
             .map(|&r| mesh.vertices()[r as usize].map(f64::from))
             .collect();
-        let faces: Vec<[u32; 3]> = mesh
+        let mut faces: Vec<[u32; 3]> = mesh
             .triangles()
             .par_iter()
             .map(|t| t.map(|v| welding.map[v as usize]))
@@ -212,6 +220,25 @@ impl Collapser {
         }
         drop(fill);
 
+        // A face on the same three vertices as an earlier one adds no surface, only
+        // non-manifold edges (scans hold such doubled sheets): it is dropped. Found from the
+        // incidence list of the face's smallest vertex.
+        let repeats: Vec<u32> = (0..faces.len() as u32)
+            .into_par_iter()
+            .filter(|&f| {
+                let face = faces[f as usize];
+                let (start, len) = links[*face.iter().min().unwrap_or(&0) as usize];
+                refs[start as usize..(start + len) as usize]
+                    .iter()
+                    .take_while(|&&g| g < f)
+                    .any(|&g| face.iter().all(|v| faces[g as usize].contains(v)))
+            })
+            .collect();
+        for &f in &repeats {
+            faces[f as usize] = [DEAD; 3];
+        }
+        let live = |f: &&u32| faces[**f as usize][0] != DEAD;
+
         // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics and
         // the sum of the face area normals. (Face planes are recomputed per incident vertex
         // rather than stored: 3× the arithmetic, but no per-face array at the memory peak.)
@@ -223,21 +250,21 @@ impl Collapser {
             .into_par_iter()
             .map(|v| {
                 let (start, len) = links[v];
-                refs[start as usize..(start + len) as usize].iter().fold(
-                    (Quadric::default(), [0.0; 3]),
-                    |(q, s), &f| {
+                refs[start as usize..(start + len) as usize]
+                    .iter()
+                    .filter(live)
+                    .fold((Quadric::default(), [0.0; 3]), |(q, s), &f| {
                         let (normal, point) = face_normal(f);
                         let plane =
                             Quadric::from_plane(normal, point, 0.5 * dot(normal, normal).sqrt());
                         (q + plane, std::array::from_fn(|k| s[k] + normal[k]))
-                    },
-                )
+                    })
             })
             .unzip();
 
         // Undirected edges `(a < b)`, enumerated per vertex from the incidence lists (parallel,
         // no global sort), in chunks of vertices with one scratch list each: the collapsible
-        // (manifold) edges, and apart the boundary and non-manifold ones as
+        // edges, and apart the boundary and non-manifold ones as
         // `(a, b, face count, first face)`.
         type Special = (u32, u32, u32, u32);
         type EdgeChunk = (Vec<(u32, u32)>, Vec<Special>);
@@ -251,7 +278,10 @@ impl Collapser {
                 for a in vertices {
                     let (start, len) = links[a];
                     local.clear();
-                    for &f in &refs[start as usize..(start + len) as usize] {
+                    for &f in refs[start as usize..(start + len) as usize]
+                        .iter()
+                        .filter(live)
+                    {
                         for x in faces[f as usize] {
                             if x as usize > a {
                                 local.push((x, f));
@@ -266,14 +296,9 @@ impl Collapser {
                             j += 1;
                         }
                         let (a, b) = (a as u32, local[i].0);
-                        match j - i {
-                            2 => edges.push((a, b)),
-                            count => {
-                                if count == 1 {
-                                    edges.push((a, b));
-                                }
-                                special.push((a, b, count as u32, local[i].1));
-                            }
+                        edges.push((a, b));
+                        if j - i != 2 {
+                            special.push((a, b, (j - i) as u32, local[i].1));
                         }
                         i = j;
                     }
@@ -298,8 +323,8 @@ impl Collapser {
                 quadrics[a as usize] += q;
                 quadrics[b as usize] += q;
             } else {
-                flags[a as usize] |= LOCKED;
-                flags[b as usize] |= LOCKED;
+                flags[a as usize] |= NON_MANIFOLD;
+                flags[b as usize] |= NON_MANIFOLD;
             }
         }
         let mut edges: Vec<(u32, u32)> =
@@ -317,7 +342,7 @@ impl Collapser {
                 meta: links[v].1 << FLAG_BITS | flags[v],
             })
             .collect();
-        let live_faces = faces.len();
+        let live_faces = faces.len() - repeats.len();
         Ok(Self {
             verts,
             quadrics,
@@ -342,6 +367,17 @@ impl Collapser {
     /// The range of `refs` holding the incident faces of `v`.
     pub(crate) fn incident(&self, v: u32) -> std::ops::Range<usize> {
         self.verts[v as usize].incident()
+    }
+
+    /// The number of live faces holding both `a` and `b`: the face count of edge `(a, b)`.
+    pub(crate) fn edge_face_count(&self, a: u32, b: u32) -> usize {
+        self.refs[self.incident(a)]
+            .iter()
+            .filter(|&&f| {
+                let face = self.faces[f as usize];
+                face[0] != DEAD && face.contains(&b)
+            })
+            .count()
     }
 
     /// Collapses `(a, b)` at `placement` and updates the connectivity.
@@ -401,7 +437,7 @@ impl Collapser {
         survivor.position = placement.position;
         survivor.region_normal =
             std::array::from_fn(|k| survivor.region_normal[k] + removed.region_normal[k]);
-        survivor.meta |= removed.meta & BOUNDARY;
+        survivor.meta |= removed.meta & (BOUNDARY | NON_MANIFOLD);
         self.verts[ir].meta |= REMOVED;
         self.parent[ir] = s;
         self.collapses += 1;

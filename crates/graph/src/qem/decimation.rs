@@ -5,7 +5,8 @@
 //!
 //! # Algorithm
 //! 1. Vertices with bit-identical positions (and UVs) are welded, so triangle soups decimate
-//!    as surfaces; faces that become degenerate are dropped.
+//!    as surfaces; faces that become degenerate, and faces repeating an earlier face's three
+//!    vertices (doubled sheets of scans), are dropped.
 //! 2. Each vertex gets the sum of the plane quadrics of its incident faces, weighted by face
 //!    area; each boundary edge adds a plane through the edge perpendicular to its face,
 //!    weighted by `boundary_weight · |edge|²`, so open borders stay in place.
@@ -43,8 +44,12 @@
 //!   non-manifold edge; a watertight input stays watertight. Every output face stays within
 //!   ~78° of the input surface around its corners (a noisy sphere whose input faces all point
 //!   outwards decimates to one whose faces all point outwards).
-//! - Vertices on non-manifold edges and UV-seam vertices (one position, several UVs) are never
-//!   moved or removed; seams therefore never tear.
+//! - From any input: no edge ends with more faces than it had (an edge with three or more
+//!   faces merges only with edges such that the result has no more than either had, or 2), so
+//!   no non-manifold edge appears and none gets worse. Vertices on non-manifold edges stay
+//!   where they are and are removed only along a non-manifold edge, onto its other end.
+//! - UV-seam vertices (one position, several UVs) are never moved or removed; seams
+//!   therefore never tear.
 //! - The same output for any rayon thread count (the setup is parallel but order-independent,
 //!   the collapse loop is sequential).
 //!
