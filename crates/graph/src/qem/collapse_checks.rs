@@ -5,7 +5,7 @@
 
 use std::cmp::Ordering;
 
-use super::collapser::{Collapser, DEAD};
+use super::collapser::{Collapser, DEAD, Placement};
 use meshgnn_geometry::vec3::{cross, dot, sub};
 
 /// Normals of faces may turn by at most `acos(0.2)` ≈ 78° in one collapse.
@@ -207,5 +207,46 @@ impl Collapser {
             }
         }
         true
+    }
+
+    /// The collapse that goes with removing seam vertex `removed` into `survivor` along a
+    /// seam edge: the twin of `removed` (same position, the other UV chart) into the twin of
+    /// `survivor` along the matching edge of the other chart, placed at that twin, checked
+    /// like any collapse. `None`, and then neither collapse happens, when a vertex has more
+    /// or fewer than one twin (three charts meet there), the twins share no seam edge, their
+    /// fans touch the first pair, or the checks reject it.
+    pub(crate) fn twin_collapse(
+        &self,
+        removed: u32,
+        survivor: u32,
+        scratch: &mut CheckScratch,
+    ) -> Option<(u32, u32, Placement)> {
+        let (r, s) = (self.twin[removed as usize], self.twin[survivor as usize]);
+        let single = |v: u32, t: u32| t != v && self.twin[t as usize] == v;
+        if !single(removed, r) || !single(survivor, s) || self.edge_face_count(r, s) != 1 {
+            return None;
+        }
+        let touches_first_pair = [r, s].iter().any(|&v| {
+            self.refs[self.incident(v)].iter().any(|&f| {
+                let face = self.faces[f as usize];
+                face[0] != DEAD && (face.contains(&removed) || face.contains(&survivor))
+            })
+        });
+        let position = self.verts[s as usize].position;
+        if touches_first_pair || !self.collapse_allowed(r, s, position, scratch) {
+            return None;
+        }
+        let cost = (self.quadrics[r as usize] + self.quadrics[s as usize])
+            .evaluate(position.map(f64::from));
+        Some((
+            r,
+            s,
+            Placement {
+                cost,
+                position,
+                survivor: s,
+                t: 1.0,
+            },
+        ))
     }
 }

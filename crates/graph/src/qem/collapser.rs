@@ -21,7 +21,8 @@ use crate::error::{Error, Result};
 
 /// Marks a dead face (`faces[f] = [DEAD; 3]`).
 pub(crate) const DEAD: u32 = u32::MAX;
-/// Vertex flag: never moved or removed (a UV seam: one position, several UVs).
+/// Vertex flag: on a UV seam (one position, several UVs): never moved, and removed only along
+/// the seam together with its twin (`Collapser::twin_collapse`).
 pub(crate) const LOCKED: u32 = 1;
 /// Vertex flag: on the input's open boundary.
 pub(crate) const BOUNDARY: u32 = 2;
@@ -134,6 +135,8 @@ pub(crate) struct Collapser {
     uvs: Option<Vec<[f32; 2]>>,
     colors: Option<Vec<[f32; 3]>>,
     weld_map: Vec<u32>,
+    /// The next vertex at the same position (a UV seam's twins, cyclic; itself elsewhere).
+    pub twin: Vec<u32>,
     welded: bool,
     /// The setup's edges, scored in the first pass.
     pub initial_edges: Vec<(u32, u32)>,
@@ -311,10 +314,27 @@ impl Collapser {
             .iter()
             .map(|&s| if s { LOCKED } else { 0 })
             .collect();
+        // A seam vertex stands for the whole surface around its position: the face planes of
+        // its twins' charts join its quadric (equal for all twins, and kept equal since twins
+        // collapse together).
+        if welding.seam.contains(&true) {
+            let own = quadrics.clone();
+            for v in (0..n).filter(|&v| welding.seam[v]) {
+                let mut t = welding.twin[v] as usize;
+                while t != v {
+                    quadrics[v] += own[t];
+                    t = welding.twin[t] as usize;
+                }
+            }
+        }
         for &(a, b, count, f) in chunks.iter().flat_map(|(_, special)| special) {
             if count == 1 {
                 flags[a as usize] |= BOUNDARY;
                 flags[b as usize] |= BOUNDARY;
+                // A seam is no border of the surface: no border plane along it.
+                if welding.seam[a as usize] && welding.seam[b as usize] {
+                    continue;
+                }
                 let (normal, _) = face_normal(f);
                 let (pa, pb) = (positions[a as usize], positions[b as usize]);
                 let e = sub(pb, pa);
@@ -355,6 +375,7 @@ impl Collapser {
             colors,
             welded: welding.merged_any(),
             weld_map: welding.map,
+            twin: welding.twin,
             initial_edges: edges,
             scratch_faces: Vec::new(),
             max_cost: 0.0,
@@ -367,6 +388,13 @@ impl Collapser {
     /// The range of `refs` holding the incident faces of `v`.
     pub(crate) fn incident(&self, v: u32) -> std::ops::Range<usize> {
         self.verts[v as usize].incident()
+    }
+
+    /// Whether collapsing `(a, b)` at `cost` exceeds the bound `max_error2` on the normalised
+    /// cost (length², see `Decimation::error`).
+    pub(crate) fn exceeds_error(&self, a: u32, b: u32, cost: f64, max_error2: Option<f64>) -> bool {
+        let weight = (self.quadrics[a as usize] + self.quadrics[b as usize]).weight();
+        max_error2.is_some_and(|limit| weight > 0.0 && cost / weight > limit)
     }
 
     /// The number of live faces holding both `a` and `b`: the face count of edge `(a, b)`.
@@ -433,6 +461,16 @@ impl Collapser {
         let q = self.quadrics[is] + self.quadrics[ir];
         self.quadrics[is] = q;
         let removed = self.verts[ir];
+        // Twins share one quadric: what a seam vertex absorbs from its own chart, its twins
+        // absorb too (a seam pair collapse adds each side's equal share itself).
+        if self.verts[is].locked() && !removed.locked() {
+            let absorbed = self.quadrics[ir];
+            let mut t = self.twin[is] as usize;
+            while t != is {
+                self.quadrics[t] += absorbed;
+                t = self.twin[t] as usize;
+            }
+        }
         let survivor = &mut self.verts[is];
         survivor.position = placement.position;
         survivor.region_normal =

@@ -48,8 +48,11 @@
 //!   faces merges only with edges such that the result has no more than either had, or 2), so
 //!   no non-manifold edge appears and none gets worse. Vertices on non-manifold edges stay
 //!   where they are and are removed only along a non-manifold edge, onto its other end.
-//! - UV-seam vertices (one position, several UVs) are never moved or removed; seams
-//!   therefore never tear.
+//! - UV-seam vertices (one position, several UVs) never move; one is removed only along the
+//!   seam, onto its neighbour there, together with its twin on the other side of the seam
+//!   (both collapses checked, both or neither done; twins share one quadric, the face planes
+//!   of both sides). Seams therefore never tear. Where three or more charts meet, the vertex
+//!   stays.
 //! - The same output for any rayon thread count (the setup is parallel but order-independent,
 //!   the collapse loop is sequential).
 //!
@@ -320,12 +323,28 @@ fn run(
                 }
                 let survivor = spec.placement.survivor;
                 let removed = if survivor == a { b } else { a };
-                state.collapse(a, b, spec.placement);
-                touched.push(survivor);
-                for v in [survivor, removed] {
-                    changed.insert(v);
-                    batch_changed.insert(v);
-                    batch_list.push(v);
+                // A seam vertex goes only with its twin on the other side of the seam.
+                let twin = if state.verts[removed as usize].locked() {
+                    match state.twin_collapse(removed, survivor, &mut check_scratch) {
+                        Some((r, s, p)) if !state.exceeds_error(r, s, p.cost, max_error2) => {
+                            Some((r, s, p))
+                        }
+                        _ => continue,
+                    }
+                } else {
+                    None
+                };
+                let mut collapses = [Some((a, b, spec.placement)), twin];
+                for (a, b, placement) in collapses.iter_mut().filter_map(Option::take) {
+                    let survivor = placement.survivor;
+                    let removed = if survivor == a { b } else { a };
+                    state.collapse(a, b, placement);
+                    touched.push(survivor);
+                    for v in [survivor, removed] {
+                        changed.insert(v);
+                        batch_changed.insert(v);
+                        batch_list.push(v);
+                    }
                 }
             }
             for v in batch_list.drain(..) {

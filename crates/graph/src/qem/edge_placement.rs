@@ -7,13 +7,14 @@ use meshgnn_geometry::vec3::{dot, sub};
 
 impl Collapser {
     /// Eq. (GH97 §4): the cheapest placement of collapsing edge `(a, b)` under
-    /// `Q_a + Q_b`; `None` when both ends are locked, or both are pinned (locked or on a
-    /// non-manifold edge) and `(a, b)` is not itself a non-manifold edge.
+    /// `Q_a + Q_b`; `None` when both ends are locked and `(a, b)` is not a seam edge (one
+    /// face), or both are pinned (locked or on a non-manifold edge) and `(a, b)` is not itself
+    /// a non-manifold edge.
     ///
     /// Boundaries stay on the input's boundary polyline: an interior → boundary edge collapses
     /// onto the boundary vertex and a boundary edge to the best point of its segment.
     /// Non-manifold edges keep their vertices: an edge to a pinned vertex collapses onto it,
-    /// and one along a non-manifold edge onto one of its ends. Every
+    /// and one along a non-manifold edge or a seam onto one of its ends. Every
     /// candidate position is rounded to `f32` (the output precision) before it is scored, so
     /// the cost and the validity checks see exactly the position that is written.
     pub(crate) fn placement(&self, a: u32, b: u32) -> Option<Placement> {
@@ -21,7 +22,11 @@ impl Collapser {
         let (va, vb) = (self.verts[ia], self.verts[ib]);
         let (la, lb) = (va.locked(), vb.locked());
         let (pin_a, pin_b) = (la || va.non_manifold(), lb || vb.non_manifold());
-        if (la && lb) || (pin_a && pin_b && self.edge_face_count(a, b) < 3) {
+        if la && lb {
+            if self.edge_face_count(a, b) != 1 {
+                return None;
+            }
+        } else if pin_a && pin_b && self.edge_face_count(a, b) < 3 {
             return None;
         }
         let q = self.quadrics[ia] + self.quadrics[ib];
@@ -46,9 +51,9 @@ impl Collapser {
         };
         let (ba, bb) = (va.boundary(), vb.boundary());
         let at = |t: f64| std::array::from_fn(|i| pa[i] + t * (pb[i] - pa[i]));
-        if la || (pin_a && !pin_b) || (ba && !bb && !pin_b) {
+        if (la && !lb) || (pin_a && !pin_b) || (ba && !bb && !pin_b) {
             consider(pa, a, 0.0);
-        } else if lb || (pin_b && !pin_a) || (bb && !ba && !pin_a) {
+        } else if (lb && !la) || (pin_b && !pin_a) || (bb && !ba && !pin_a) {
             consider(pb, b, 1.0);
         } else if self.keep_original_positions || (pin_a && pin_b) {
             consider(pa, a, 0.0);

@@ -22,7 +22,7 @@ const FOOTPRINT: usize = 22;
 /// What the evaluation of one candidate found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Verdict {
-    /// An endpoint changed earlier in the pass, or both ends are locked: skip.
+    /// An endpoint changed earlier in the pass, or the edge has no placement: skip.
     Skip,
     /// The normalised cost exceeds the error bound.
     OverError,
@@ -95,14 +95,11 @@ impl Collapser {
             let Some(placement) = self.placement(a, b) else {
                 return Speculation::skip(nothing);
             };
-            if let Some(limit) = max_error2 {
-                let weight = (self.quadrics[a as usize] + self.quadrics[b as usize]).weight();
-                if weight > 0.0 && placement.cost / weight > limit {
-                    return Speculation {
-                        verdict: Verdict::OverError,
-                        ..Speculation::skip(placement)
-                    };
-                }
+            if self.exceeds_error(a, b, placement.cost, max_error2) {
+                return Speculation {
+                    verdict: Verdict::OverError,
+                    ..Speculation::skip(placement)
+                };
             }
             let allowed = self.collapse_allowed(a, b, placement.position, scratch);
             let mut spec = Speculation {

@@ -3,8 +3,8 @@
 //!
 //! Vertices are merged when their positions are bit-identical (with `-0.0 == 0.0`) and, when
 //! texture coordinates are given, their UVs are bit-identical too: vertices at one position with
-//! different UVs stay apart and are flagged as *seam* vertices, which decimation keeps fixed so
-//! that textures do not tear.
+//! different UVs stay apart and are flagged as *seam* vertices, linked to their twins, which
+//! decimation moves only together so that textures do not tear.
 
 use rayon::prelude::*;
 
@@ -17,6 +17,9 @@ pub(crate) struct Welding {
     pub representatives: Vec<u32>,
     /// `#W`: true when another welded vertex has the same position (a UV seam).
     pub seam: Vec<bool>,
+    /// `#W`: the next welded vertex at the same position, in a cycle through all of them
+    /// (itself when it is alone there).
+    pub twin: Vec<u32>,
 }
 
 impl Welding {
@@ -49,6 +52,9 @@ pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) 
     let n = vertices.len();
     let mut representative = vec![0u32; n];
     let mut seam_original = vec![false; n];
+    // The next representative at the same position (cyclic), for representatives only.
+    let mut next_original: Vec<u32> = (0..n as u32).collect();
+    let mut reps_here: Vec<u32> = Vec::new();
     let mut start = 0;
     while start < order.len() {
         let pos = order[start].0;
@@ -59,8 +65,10 @@ pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) 
         let group = &order[start..end];
         let several_uvs = group.iter().any(|g| g.1 != group[0].1);
         let mut k = 0;
+        reps_here.clear();
         while k < group.len() {
             let rep = group[k].2;
+            reps_here.push(rep);
             let mut m = k;
             while m < group.len() && group[m].1 == group[k].1 {
                 representative[group[m].2 as usize] = rep;
@@ -68,6 +76,9 @@ pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) 
                 m += 1;
             }
             k = m;
+        }
+        for (i, &r) in reps_here.iter().enumerate() {
+            next_original[r as usize] = reps_here[(i + 1) % reps_here.len()];
         }
         start = end;
     }
@@ -86,10 +97,15 @@ pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) 
             map[i] = map[rep];
         }
     }
+    let twin = representatives
+        .iter()
+        .map(|&r| map[next_original[r as usize] as usize])
+        .collect();
     Welding {
         map,
         representatives,
         seam,
+        twin,
     }
 }
 
@@ -116,5 +132,6 @@ mod tests {
         let w = weld_by_position(&v, Some(&uv));
         assert_eq!(w.map, vec![0, 1, 0, 2, 3]);
         assert_eq!(w.seam, vec![false, true, true, false]);
+        assert_eq!(w.twin, vec![0, 2, 1, 3]);
     }
 }
