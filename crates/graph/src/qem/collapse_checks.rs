@@ -209,44 +209,59 @@ impl Collapser {
         true
     }
 
-    /// The collapse that goes with removing seam vertex `removed` into `survivor` along a
-    /// seam edge: the twin of `removed` (same position, the other UV chart) into the twin of
-    /// `survivor` along the matching edge of the other chart, placed at that twin, checked
-    /// like any collapse. `None`, and then neither collapse happens, when a vertex has more
-    /// or fewer than one twin (three charts meet there), the twins share no seam edge, their
-    /// fans touch the first pair, or the checks reject it.
-    pub(crate) fn twin_collapse(
+    /// The collapses that go with removing seam vertex `removed` into `survivor` along a
+    /// seam edge, written to `out`: each twin of `removed` (same position, another UV chart)
+    /// into a twin of `survivor` along a seam edge of its chart, placed at that twin and
+    /// checked like any collapse. False, and then none of them happens, when a twin of
+    /// `removed` finds no such edge, the pairs' fans touch one another, or a check rejects.
+    pub(crate) fn twin_collapses(
         &self,
         removed: u32,
         survivor: u32,
         scratch: &mut CheckScratch,
-    ) -> Option<(u32, u32, Placement)> {
-        let (r, s) = (self.twin[removed as usize], self.twin[survivor as usize]);
-        let single = |v: u32, t: u32| t != v && self.twin[t as usize] == v;
-        if !single(removed, r) || !single(survivor, s) || self.edge_face_count(r, s) != 1 {
-            return None;
-        }
-        let touches_first_pair = [r, s].iter().any(|&v| {
+        out: &mut Vec<(u32, u32, Placement)>,
+    ) -> bool {
+        out.clear();
+        let twins = |v: u32| {
+            std::iter::successors(Some(self.twin[v as usize]), move |&t| {
+                Some(self.twin[t as usize])
+            })
+            .take_while(move |&t| t != v)
+        };
+        let fan_touches = |v: u32, others: &[u32]| {
             self.refs[self.incident(v)].iter().any(|&f| {
                 let face = self.faces[f as usize];
-                face[0] != DEAD && (face.contains(&removed) || face.contains(&survivor))
+                face[0] != DEAD && others.iter().any(|o| face.contains(o))
             })
-        });
-        let position = self.verts[s as usize].position;
-        if touches_first_pair || !self.collapse_allowed(r, s, position, scratch) {
-            return None;
+        };
+        let mut moved = vec![removed, survivor];
+        for r in twins(removed) {
+            let Some(s) =
+                twins(survivor).find(|&s| !moved.contains(&s) && self.edge_face_count(r, s) == 1)
+            else {
+                return false;
+            };
+            let position = self.verts[s as usize].position;
+            if fan_touches(r, &moved)
+                || fan_touches(s, &moved)
+                || !self.collapse_allowed(r, s, position, scratch)
+            {
+                return false;
+            }
+            let cost = (self.quadrics[r as usize] + self.quadrics[s as usize])
+                .evaluate(position.map(f64::from));
+            out.push((
+                r,
+                s,
+                Placement {
+                    cost,
+                    position,
+                    survivor: s,
+                    t: 1.0,
+                },
+            ));
+            moved.extend([r, s]);
         }
-        let cost = (self.quadrics[r as usize] + self.quadrics[s as usize])
-            .evaluate(position.map(f64::from));
-        Some((
-            r,
-            s,
-            Placement {
-                cost,
-                position,
-                survivor: s,
-                t: 1.0,
-            },
-        ))
+        true
     }
 }

@@ -48,11 +48,12 @@
 //!   faces merges only with edges such that the result has no more than either had, or 2), so
 //!   no non-manifold edge appears and none gets worse. Vertices on non-manifold edges stay
 //!   where they are and are removed only along a non-manifold edge, onto its other end.
-//! - UV-seam vertices (one position, several UVs) never move; one is removed only along the
-//!   seam, onto its neighbour there, together with its twin on the other side of the seam
-//!   (both collapses checked, both or neither done; twins share one quadric, the face planes
-//!   of both sides). Seams therefore never tear. Where three or more charts meet, the vertex
-//!   stays.
+//! - UV-seam vertices (one position, several UVs: *twins*) never move; one is removed only
+//!   along the seam, onto its neighbour there, together with each of its twins, each onto a
+//!   twin of that neighbour along its own chart's seam edge (all collapses checked, all or
+//!   none done; twins share one quadric, the face planes of all their charts). Seams
+//!   therefore never tear; a vertex where three charts meet stays unless each of its twins
+//!   has such an edge.
 //! - The same output for any rayon thread count (the setup is parallel but order-independent,
 //!   the collapse loop is sequential).
 //!
@@ -274,6 +275,8 @@ fn run(
     let mut touched: Vec<u32> = Vec::new();
     let mut speculations = Speculations::default();
     let mut check_scratch = CheckScratch::default();
+    // The collapses of a seam vertex's twins that go with the current one.
+    let mut twins = Vec::new();
     while state.live_faces > target {
         pass += 1;
         if pass > 1 {
@@ -324,18 +327,17 @@ fn run(
                 let survivor = spec.placement.survivor;
                 let removed = if survivor == a { b } else { a };
                 // A seam vertex goes only with its twin on the other side of the seam.
-                let twin = if state.verts[removed as usize].locked() {
-                    match state.twin_collapse(removed, survivor, &mut check_scratch) {
-                        Some((r, s, p)) if !state.exceeds_error(r, s, p.cost, max_error2) => {
-                            Some((r, s, p))
-                        }
-                        _ => continue,
-                    }
-                } else {
-                    None
-                };
-                let mut collapses = [Some((a, b, spec.placement)), twin];
-                for (a, b, placement) in collapses.iter_mut().filter_map(Option::take) {
+                twins.clear();
+                if state.verts[removed as usize].locked()
+                    && (!state.twin_collapses(removed, survivor, &mut check_scratch, &mut twins)
+                        || twins
+                            .iter()
+                            .any(|&(r, s, p)| state.exceeds_error(r, s, p.cost, max_error2)))
+                {
+                    continue;
+                }
+                twins.push((a, b, spec.placement));
+                for &(a, b, placement) in twins.iter().rev() {
                     let survivor = placement.survivor;
                     let removed = if survivor == a { b } else { a };
                     state.collapse(a, b, placement);
