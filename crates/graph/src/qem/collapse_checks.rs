@@ -6,6 +6,7 @@
 use std::cmp::Ordering;
 
 use super::collapser::{Collapser, DEAD, Placement};
+use super::weld_by_position::twins_of;
 use meshgnn_geometry::vec3::{cross, dot, sub};
 
 /// Normals of faces may turn by at most `acos(0.2)` ≈ 78° in one collapse.
@@ -222,12 +223,6 @@ impl Collapser {
         out: &mut Vec<(u32, u32, Placement)>,
     ) -> bool {
         out.clear();
-        let twins = |v: u32| {
-            std::iter::successors(Some(self.twin[v as usize]), move |&t| {
-                Some(self.twin[t as usize])
-            })
-            .take_while(move |&t| t != v)
-        };
         let fan_touches = |v: u32, others: &[u32]| {
             self.refs[self.incident(v)].iter().any(|&f| {
                 let face = self.faces[f as usize];
@@ -235,9 +230,9 @@ impl Collapser {
             })
         };
         let mut moved = vec![removed, survivor];
-        for r in twins(removed) {
-            let Some(s) =
-                twins(survivor).find(|&s| !moved.contains(&s) && self.edge_face_count(r, s) == 1)
+        for r in twins_of(&self.twin, removed) {
+            let Some(s) = twins_of(&self.twin, survivor)
+                .find(|&s| !moved.contains(&s) && self.edge_face_count(r, s) == 1)
             else {
                 return false;
             };

@@ -16,13 +16,13 @@ use rayon::prelude::*;
 
 use super::decimation::{Decimation, DecimationOptions, StopReason};
 use super::quadric::Quadric;
-use super::weld_by_position::weld_by_position;
+use super::weld_by_position::{twins_of, weld_by_position};
 use crate::error::{Error, Result};
 
 /// Marks a dead face (`faces[f] = [DEAD; 3]`).
 pub(crate) const DEAD: u32 = u32::MAX;
 /// Vertex flag: on a UV seam (one position, several UVs): never moved, and removed only along
-/// the seam together with its twin (`Collapser::twin_collapse`).
+/// the seam together with its twins (`Collapser::twin_collapses`).
 pub(crate) const LOCKED: u32 = 1;
 /// Vertex flag: on the input's open boundary.
 pub(crate) const BOUNDARY: u32 = 2;
@@ -320,10 +320,8 @@ impl Collapser {
         if welding.seam.contains(&true) {
             let own = quadrics.clone();
             for v in (0..n).filter(|&v| welding.seam[v]) {
-                let mut t = welding.twin[v] as usize;
-                while t != v {
-                    quadrics[v] += own[t];
-                    t = welding.twin[t] as usize;
+                for t in twins_of(&welding.twin, v as u32) {
+                    quadrics[v] += own[t as usize];
                 }
             }
         }
@@ -465,10 +463,8 @@ impl Collapser {
         // absorb too (a seam pair collapse adds each side's equal share itself).
         if self.verts[is].locked() && !removed.locked() {
             let absorbed = self.quadrics[ir];
-            let mut t = self.twin[is] as usize;
-            while t != is {
-                self.quadrics[t] += absorbed;
-                t = self.twin[t] as usize;
+            for t in twins_of(&self.twin, s) {
+                self.quadrics[t as usize] += absorbed;
             }
         }
         let survivor = &mut self.verts[is];

@@ -29,6 +29,12 @@ impl Welding {
     }
 }
 
+/// The other vertices at the position of `v`, following the cycle `twin` (of [`Welding`]).
+pub(crate) fn twins_of(twin: &[u32], v: u32) -> impl Iterator<Item = u32> + '_ {
+    std::iter::successors(Some(twin[v as usize]), move |&t| Some(twin[t as usize]))
+        .take_while(move |&t| t != v)
+}
+
 /// The bit pattern of a coordinate with `-0.0` folded onto `0.0`.
 fn key(x: f32) -> u32 {
     if x == 0.0 { 0 } else { x.to_bits() }
