@@ -263,6 +263,49 @@ pub(crate) fn checkpoint_error(source: &Path, reason: String) -> Error {
     }
 }
 
+/// `error` as a checkpoint error naming `path`, unless it already is one.
+pub(crate) fn checkpoint_of(path: &Path, error: Error) -> Error {
+    match error {
+        Error::Checkpoint { .. } => error,
+        other => checkpoint_error(path, other.to_string()),
+    }
+}
+
+/// The variables of `vars`, locked.
+pub(crate) fn lock(
+    vars: &candle_nn::VarMap,
+) -> Result<std::sync::MutexGuard<'_, HashMap<String, candle_core::Var>>> {
+    vars.data().lock().map_err(|_| Error::Invalid {
+        what: "model variables".into(),
+        reason: "lock poisoned by a panic in another thread".into(),
+    })
+}
+
+/// Sets every variable of `vars` from the tensor of the same name in `tensors`; errors name a
+/// missing tensor or one whose shape or type differs from the variable's.
+pub(crate) fn set_vars(vars: &candle_nn::VarMap, tensors: &HashMap<String, Tensor>) -> Result<()> {
+    for (name, var) in lock(vars)?.iter() {
+        let value = tensors.get(name).ok_or_else(|| Error::Invalid {
+            what: format!("tensor `{name}`"),
+            reason: "missing from the model file".into(),
+        })?;
+        if value.dims() != var.dims() || value.dtype() != var.dtype() {
+            return Err(Error::Invalid {
+                what: format!("tensor `{name}`"),
+                reason: format!(
+                    "{:?} {:?}, the config needs {:?} {:?}",
+                    value.dtype(),
+                    value.dims(),
+                    var.dtype(),
+                    var.dims()
+                ),
+            });
+        }
+        var.set(value)?;
+    }
+    Ok(())
+}
+
 fn current(mut object: Map<String, Value>, source: &Path) -> Result<CheckpointHeader> {
     let fail = |reason: String| checkpoint_error(source, reason);
     let model = match object.remove("model") {

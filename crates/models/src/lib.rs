@@ -5,7 +5,8 @@
 //! (`handy`: the spiral-convolution autoencoder "Handy++" and its PCA baseline) and the
 //! learnable point-cloud simplifier of ch. 5 (`point_simplifier`, with the simplification
 //! methods it is compared with in `point_selection`), and the neural mesh simplifier of ch. 6
-//! (`mesh_simplifier`: built and tested, not yet trained; docs/mesh_simplifier_model.md).
+//! (`mesh_simplifier`: built and tested, not yet trained; docs/mesh_simplifier_model.md), and
+//! the 4D expression generator of ch. 4 (`expression`, with its blendshape baseline).
 //!
 //! One convention for every model (docs/architecture.md): a config struct, `new(vb, &cfg)` and
 //! `forward`; one training loop ([`training::train`] over a [`training::Trainable`]); one
@@ -19,6 +20,7 @@ mod count_bounds;
 mod error;
 mod tensor_file;
 
+pub mod expression;
 pub mod handy;
 pub mod mesh_simplifier;
 pub mod point_selection;

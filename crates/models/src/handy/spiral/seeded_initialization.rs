@@ -5,13 +5,15 @@
 //! `1/√fan_in`, drawn from the half-open `U[−1/√fan_in, 1/√fan_in)` as `torch.nn.init.uniform_`
 //! does, for weights and biases; the fan-in of `x.bias` is read from `x.weight`). Variables that
 //! are not a linear layer's `weight (out, fan_in)` or its `bias` (batch-norm scale and shift)
-//! keep their constructor values.
+//! keep their constructor values. Recurrent layers in PyTorch's naming (`weight_ih_l0`,
+//! `weight_hh_l0`, `bias_ih_l0`, `bias_hh_l0` of an LSTM) get PyTorch's `U[−1/√H, 1/√H)` for
+//! all four, `H` the hidden size (`weight_hh_l0`'s second dimension).
 
 use candle_core::Tensor;
 use candle_nn::VarMap;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
-use crate::{Error, Result};
+use crate::Result;
 
 /// Re-initialises every linear weight and bias of `vars` from `seed`: the same seed gives the
 /// same weights bit for bit. Weights are `(out, fan_in)`; a bias `(out)` uses its weight's
@@ -32,19 +34,19 @@ use crate::{Error, Result};
 /// # Ok::<(), meshgnn_models::Error>(())
 /// ```
 pub fn seeded_initialization(vars: &VarMap, seed: u64) -> Result<()> {
-    let data = vars.data().lock().map_err(|_| Error::Invalid {
-        what: "model variables".into(),
-        reason: "lock poisoned by a panic in another thread".into(),
-    })?;
+    let data = crate::checkpoint::lock(vars)?;
     let mut names: Vec<&String> = data.keys().collect();
     names.sort();
     let mut rng = StdRng::seed_from_u64(seed);
     for name in names {
         let Some(var) = data.get(name) else { continue };
-        let weight = name
-            .strip_suffix(".bias")
-            .or(name.strip_suffix(".weight"))
-            .and_then(|stem| data.get(&format!("{stem}.weight")));
+        let weight = match recurrent_stem(name) {
+            Some((stem, layer)) => data.get(&format!("{stem}weight_hh_{layer}")),
+            None => name
+                .strip_suffix(".bias")
+                .or(name.strip_suffix(".weight"))
+                .and_then(|stem| data.get(&format!("{stem}.weight"))),
+        };
         let Some(&[_, fan_in]) = weight.map(|w| w.dims()) else {
             continue;
         };
@@ -56,4 +58,13 @@ pub fn seeded_initialization(vars: &VarMap, seed: u64) -> Result<()> {
         var.set(&tensor)?;
     }
     Ok(())
+}
+
+/// `(prefix, "l0")` of a recurrent layer's parameter `prefix{weight,bias}_{ih,hh}_l0`.
+fn recurrent_stem(name: &str) -> Option<(&str, &str)> {
+    let (head, layer) = name.rsplit_once('_')?;
+    let stem = ["weight_ih", "weight_hh", "bias_ih", "bias_hh"]
+        .iter()
+        .find_map(|kind| head.strip_suffix(kind))?;
+    layer.starts_with('l').then_some((stem, layer))
 }

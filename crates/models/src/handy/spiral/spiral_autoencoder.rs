@@ -20,9 +20,8 @@ use meshgnn_graph::HierarchyOptions;
 use serde::{Deserialize, Serialize};
 
 use crate::handy::spiral::pool::check_vertices;
-use crate::handy::spiral::{
-    Pool, SpiralConv, SpiralConvConfig, SpiralPadding, TemplateTensors, Unpool,
-};
+use crate::handy::spiral::spiral_decoder::SpiralLevel;
+use crate::handy::spiral::{Pool, SpiralDecoder, SpiralPadding, TemplateTensors};
 use crate::{Error, Result};
 
 /// The non-linearity after every spiral convolution but the last.
@@ -132,29 +131,13 @@ impl SpiralAutoencoderConfig {
     }
 }
 
-/// One spiral convolution with its level's spiral indices.
-#[derive(Debug, Clone)]
-struct Level {
-    conv: SpiralConv,
-    spirals: Tensor,
-}
-
-impl Level {
-    fn forward(&self, x: &Tensor) -> Result<Tensor> {
-        self.conv.forward(x, &self.spirals)
-    }
-}
-
 /// Table 3.1's autoencoder: `(B, V, 3)` ↔ `(B, Z)`, on normalised coordinates.
 #[derive(Debug, Clone)]
 pub struct SpiralAutoencoder {
-    encoder: Vec<Level>,
+    encoder: Vec<SpiralLevel>,
     pools: Vec<Pool>,
     encoder_latent: Linear,
-    decoder_latent: Linear,
-    unpools: Vec<Unpool>,
-    /// Finest level first.
-    decoder: Vec<Level>,
+    decoder: SpiralDecoder,
     activation: Activation,
     vertices: usize,
     coarse_vertices: usize,
@@ -189,54 +172,41 @@ impl SpiralAutoencoder {
         let n = config.channels.len();
         let mut channels = vec![3];
         channels.extend_from_slice(&config.channels);
-        let counts = template.vertex_counts();
-        let level_spirals = (0..n)
-            .map(|i| template.spirals(i, config.padding))
-            .collect::<Result<Vec<_>>>()?;
-        let conv_config = |i: usize| SpiralConvConfig {
-            length: config.spiral_lengths[i],
-            padding: config.padding,
-        };
         let venc = vb.pp("encoder");
-        let vdec = vb.pp("decoder");
-        let mut encoder = Vec::with_capacity(n);
-        let mut decoder = Vec::with_capacity(n);
-        for i in 0..n {
-            encoder.push(Level {
-                conv: SpiralConv::new(
-                    venc.pp(format!("conv{i}")),
+        let encoder = (0..n)
+            .map(|i| {
+                SpiralLevel::new(
+                    venc.clone(),
+                    template,
+                    i,
                     channels[i],
                     channels[i + 1],
-                    conv_config(i),
-                )?,
-                spirals: level_spirals[i].clone(),
-            });
-            decoder.push(Level {
-                conv: SpiralConv::new(
-                    vdec.pp(format!("conv{i}")),
-                    channels[i + 1],
-                    channels[i],
-                    conv_config(i),
-                )?,
-                spirals: level_spirals[i].clone(),
-            });
-        }
-        let coarse_vertices = counts[n];
+                    config.padding,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let coarse_vertices = template.vertex_counts()[n];
         let coarse_channels = channels[n];
-        let flat = coarse_vertices * coarse_channels;
         Ok(Self {
             encoder,
             pools: (0..n)
                 .map(|i| template.pool(i).cloned())
                 .collect::<Result<_>>()?,
-            encoder_latent: candle_nn::linear(flat, config.latent_size, venc.pp("latent"))?,
-            decoder_latent: candle_nn::linear(config.latent_size, flat, vdec.pp("latent"))?,
-            unpools: (0..n)
-                .map(|i| template.unpool(i).cloned())
-                .collect::<Result<_>>()?,
-            decoder,
+            encoder_latent: candle_nn::linear(
+                coarse_vertices * coarse_channels,
+                config.latent_size,
+                venc.pp("latent"),
+            )?,
+            decoder: SpiralDecoder::new(
+                vb.pp("decoder"),
+                template,
+                &config.channels,
+                config.latent_size,
+                config.activation,
+                config.padding,
+            )?,
             activation: config.activation,
-            vertices: counts[0],
+            vertices: template.vertex_counts()[0],
             coarse_vertices,
             coarse_channels,
             latent_size: config.latent_size,
@@ -273,27 +243,7 @@ impl SpiralAutoencoder {
 
     /// Decoder: `z: (B, Z)` → `(B, V, 3)`.
     pub fn decode(&self, z: &Tensor) -> Result<Tensor> {
-        let batch = match z.dims() {
-            [b, k] if *k == self.latent_size => *b,
-            dims => {
-                return Err(Error::Invalid {
-                    what: "latent codes".into(),
-                    reason: format!("shape {dims:?}, expected (B, {})", self.latent_size),
-                });
-            }
-        };
-        let mut h = self.decoder_latent.forward(z)?.reshape((
-            batch,
-            self.coarse_vertices,
-            self.coarse_channels,
-        ))?;
-        for (i, (level, unpool)) in self.decoder.iter().zip(&self.unpools).enumerate().rev() {
-            h = level.forward(&unpool.forward(&h)?)?;
-            if i > 0 {
-                h = self.activation.apply(&h)?;
-            }
-        }
-        Ok(h)
+        self.decoder.forward(z)
     }
 
     /// `decode(encode(x))`: `(B, V, 3)` → `(B, V, 3)`.

@@ -18,6 +18,7 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 
+use crate::checkpoint::{checkpoint_of, lock, set_vars};
 use crate::handy::spiral::{
     SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
     seeded_initialization,
@@ -259,22 +260,7 @@ impl SpiralMorphableModel {
         };
         let normalization = VertexNormalization::from_tensors(get(MEAN)?, get(STD)?)?;
         let model = Self::assemble(template, &config, normalization)?;
-        for (name, var) in lock(&model.vars)?.iter() {
-            let value = get(name)?;
-            if value.dims() != var.dims() || value.dtype() != var.dtype() {
-                return Err(Error::Invalid {
-                    what: format!("tensor `{name}`"),
-                    reason: format!(
-                        "{:?} {:?}, the config needs {:?} {:?}",
-                        value.dtype(),
-                        value.dims(),
-                        var.dtype(),
-                        var.dims()
-                    ),
-                });
-            }
-            var.set(&value)?;
-        }
+        set_vars(&model.vars, &tensors)?;
         Ok(model)
     }
 }
@@ -314,23 +300,6 @@ impl MorphableModel for SpiralMorphableModel {
     fn decode(&self, latents: &Tensor) -> Result<Tensor> {
         let y = self.network.decode(&latents.to_dtype(DType::F32)?)?;
         self.normalization.denormalize(&y)
-    }
-}
-
-fn lock(vars: &VarMap) -> Result<std::sync::MutexGuard<'_, HashMap<String, candle_core::Var>>> {
-    vars.data().lock().map_err(|_| Error::Invalid {
-        what: "model variables".into(),
-        reason: "lock poisoned by a panic in another thread".into(),
-    })
-}
-
-fn checkpoint_of(path: &Path, error: Error) -> Error {
-    match error {
-        Error::Checkpoint { .. } => error,
-        other => Error::Checkpoint {
-            path: path.to_path_buf(),
-            reason: other.to_string(),
-        },
     }
 }
 

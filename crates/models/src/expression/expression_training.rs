@@ -1,0 +1,217 @@
+//! What the expression generator trains (thesis ch. 4.3): eq. 4.2, `L = L_r + L_c` (L1
+//! reconstruction plus temporal coherence, `meshgnn_losses::losses`), on whole sequences,
+//! in millimetres; validation is the mean per-vertex Euclidean error (mm) on held-out
+//! subjects. The loop (Adam, lr 1e-3 × 0.99 per epoch, checkpoints, resuming) is
+//! [`crate::training::train`]. The baseline trains the same way: only its decoder differs.
+
+use std::path::Path;
+
+use candle_core::{Device, Tensor, Var};
+use meshgnn_geometry::TriMesh;
+use meshgnn_losses::losses::{reconstruction_l1, temporal_coherence};
+
+use crate::adam::sorted_vars;
+use crate::expression::{
+    Blendshapes, DecoderKind, EXPRESSION_MODEL_NAME, ExpressionGeneratorConfig, ExpressionModel,
+    ExpressionSequences,
+};
+use crate::training::{BatchLoss, StepContext, Trainable};
+use crate::{Checkpoint, Result};
+
+/// One sequence as tensors: labels `(1, T, 6)` and displacements from neutral `(1, T, V, 3)`.
+struct SequenceTensors {
+    labels: Tensor,
+    displacements: Tensor,
+}
+
+fn sequence_tensors(data: &ExpressionSequences, device: &Device) -> Result<Vec<SequenceTensors>> {
+    let displacements = data.displacements();
+    let mut at = 0;
+    data.sequences
+        .iter()
+        .map(|q| {
+            let t = q.frames.len();
+            let v = q.frames.first().map_or(0, Vec::len);
+            let d: Vec<f32> = displacements[at..at + t]
+                .iter()
+                .flatten()
+                .flatten()
+                .copied()
+                .collect();
+            at += t;
+            Ok(SequenceTensors {
+                labels: Tensor::from_vec(q.labels.concat(), (1, t, 6), device)?,
+                displacements: Tensor::from_vec(d, (1, t, v, 3), device)?,
+            })
+        })
+        .collect()
+}
+
+/// Eq. 4.2 of `predicted` against `target`, both `(1, T, V, 3)`: `L_r`, plus `L_c` when the
+/// sequence has two frames or more.
+pub fn expression_loss(predicted: &Tensor, target: &Tensor) -> Result<Tensor> {
+    let reconstruction = reconstruction_l1(predicted, target)?;
+    if predicted.dim(1)? < 2 {
+        return Ok(reconstruction);
+    }
+    Ok((reconstruction + temporal_coherence(predicted, target)?)?)
+}
+
+/// Mean per-vertex Euclidean distance of `(…, 3)` tensors, as a number.
+pub(crate) fn mean_vertex_distance(a: &Tensor, b: &Tensor) -> Result<f64> {
+    let d = a
+        .sub(b)?
+        .sqr()?
+        .sum_keepdim(candle_core::D::Minus1)?
+        .sqrt()?;
+    Ok(f64::from(d.mean_all()?.to_scalar::<f32>()?))
+}
+
+/// An expression model with its training and validation sequences.
+pub struct ExpressionTraining {
+    model: ExpressionModel,
+    template: TriMesh,
+    train: Vec<SequenceTensors>,
+    validation: Vec<SequenceTensors>,
+    device: Device,
+}
+
+impl ExpressionTraining {
+    /// A fresh model of `config` (weights from `seed`) on `template`, to be trained on `train`
+    /// and validated on `validation` (may be empty). The blendshape decoder's blendshapes are
+    /// fitted here, on the training displacements.
+    ///
+    /// ```
+    /// use candle_core::Device;
+    /// use meshgnn_models::expression::{ExpressionGeneratorConfig, ExpressionSequence, ExpressionSequences, ExpressionTraining};
+    /// use meshgnn_models::training::{TrainingConfig, train};
+    /// let sphere = meshgnn_geometry::icosphere(2);
+    /// let smile = |a: f32| sphere.vertices().iter().map(|p| [p[0], p[1] + a * p[0] * p[0], p[2]]).collect::<Vec<_>>();
+    /// let labels: Vec<[f32; 6]> = [0.0, 0.5, 1.0].iter().map(|&a| [a, 0.0, 0.0, 0.0, 0.0, 0.0]).collect();
+    /// let data = ExpressionSequences {
+    ///     neutrals: vec![smile(0.0)],
+    ///     sequences: vec![ExpressionSequence { subject: 0, expression: 0, labels,
+    ///         frames: vec![smile(0.0), smile(0.1), smile(0.2)] }],
+    /// };
+    /// let cfg = ExpressionGeneratorConfig { channels: vec![8, 16], factors: vec![4.0; 2],
+    ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
+    /// let mut task = ExpressionTraining::new(&sphere, &cfg, &data, &data, 0, &Device::Cpu)?;
+    /// let run = train(&mut task, &TrainingConfig { epochs: 2, batch_size: 1, ..Default::default() }, &mut |_| {})?;
+    /// assert!(run.history[1].validation.is_some());
+    /// # Ok::<(), meshgnn_models::Error>(())
+    /// ```
+    pub fn new(
+        template: &TriMesh,
+        config: &ExpressionGeneratorConfig,
+        train: &ExpressionSequences,
+        validation: &ExpressionSequences,
+        seed: u64,
+        device: &Device,
+    ) -> Result<Self> {
+        let v = template.vertex_count();
+        train.check("training sequences", v)?;
+        validation.check("validation sequences", v)?;
+        let blendshapes = match config.decoder {
+            DecoderKind::Blendshape => Some(Blendshapes::fit(
+                template,
+                &train.displacements(),
+                config.hidden_size,
+            )?),
+            DecoderKind::Spiral => None,
+        };
+        Ok(Self {
+            model: ExpressionModel::new(template, config, blendshapes, seed, device)?,
+            template: template.clone(),
+            train: sequence_tensors(train, device)?,
+            validation: sequence_tensors(validation, device)?,
+            device: device.clone(),
+        })
+    }
+
+    /// The model being trained.
+    pub fn model(&self) -> &ExpressionModel {
+        &self.model
+    }
+
+    /// The trained model.
+    pub fn into_model(self) -> ExpressionModel {
+        self.model
+    }
+}
+
+impl Trainable for ExpressionTraining {
+    fn model_name(&self) -> &'static str {
+        EXPRESSION_MODEL_NAME
+    }
+
+    fn train_len(&self) -> usize {
+        self.train.len()
+    }
+
+    fn parameters(&self) -> Vec<(String, Var)> {
+        sorted_vars(self.model.vars())
+    }
+
+    /// Eq. 4.2 averaged over the batch's sequences; the figure is the mean per-vertex error
+    /// (mm).
+    fn batch_loss(&self, batch: &[usize], _: &StepContext) -> Result<BatchLoss> {
+        let mut total: Option<Tensor> = None;
+        let mut mm = 0.0;
+        for &i in batch {
+            let Some(q) = self.train.get(i) else { continue };
+            let predicted = self.model.network().displacements(&q.labels)?;
+            let loss = expression_loss(&predicted, &q.displacements)?;
+            mm += mean_vertex_distance(&predicted.detach(), &q.displacements)?;
+            total = Some(match total {
+                Some(t) => (t + loss)?,
+                None => loss,
+            });
+        }
+        let n = batch.len().max(1) as f64;
+        let loss = match total {
+            Some(t) => (t / n)?,
+            None => Tensor::new(0f32, &self.device)?,
+        };
+        Ok(BatchLoss {
+            loss,
+            figure: Some(mm / n),
+        })
+    }
+
+    /// Mean per-vertex Euclidean error (mm) over every validation frame.
+    fn validation(&self) -> Result<Option<f64>> {
+        if self.validation.is_empty() {
+            return Ok(None);
+        }
+        let (mut sum, mut frames) = (0.0, 0usize);
+        for q in &self.validation {
+            let predicted = self.model.network().displacements(&q.labels)?.detach();
+            let t = q.labels.dim(1)?;
+            sum += t as f64 * mean_vertex_distance(&predicted, &q.displacements)?;
+            frames += t;
+        }
+        Ok(Some(sum / frames.max(1) as f64))
+    }
+
+    fn checkpoint(&self) -> Result<Checkpoint> {
+        self.model.to_checkpoint()
+    }
+
+    /// The checkpoint's model; it must have this config and template faces.
+    fn restore(&mut self, checkpoint: &Checkpoint, source: &Path) -> Result<()> {
+        let model = ExpressionModel::from_checkpoint(checkpoint, source, &self.device)?;
+        let bad = |reason: String| crate::checkpoint::checkpoint_error(source, reason);
+        if model.config() != self.model.config() {
+            return Err(bad(format!(
+                "was trained with {:?}, not the requested {:?}",
+                model.config(),
+                self.model.config()
+            )));
+        }
+        if model.template().triangles() != self.template.triangles() {
+            return Err(bad("its template has different faces".into()));
+        }
+        self.model = model;
+        Ok(())
+    }
+}
