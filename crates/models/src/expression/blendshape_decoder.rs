@@ -29,7 +29,8 @@ pub struct Blendshapes {
 
 impl Blendshapes {
     /// Eq. 3.2 on `displacements: #N × (#V×3)` (at most [`MAX_BLENDSHAPE_FRAMES`] of them, taken
-    /// evenly), keeping `components` of them.
+    /// evenly), keeping `components` of them; when the displacements have fewer components of
+    /// non-zero variance, the rest are zero (they add nothing, the latent size stays).
     ///
     /// ```
     /// use meshgnn_geometry::TriMesh;
@@ -49,7 +50,7 @@ impl Blendshapes {
     ) -> Result<Self> {
         let stride = displacements.len().div_ceil(MAX_BLENDSHAPE_FRAMES).max(1);
         let kept: Vec<Vec<[f32; 3]>> = displacements.iter().step_by(stride).cloned().collect();
-        let pca = Pca::fit(template, &kept, components)?;
+        let pca = Pca::fit_at_most(template, &kept, components)?;
         let flat = |v: Vec<[f32; 3]>| v.into_iter().flatten().collect::<Vec<f32>>();
         let dim = 3 * template.vertex_count();
         let mut basis = Vec::with_capacity(components * dim);
@@ -61,6 +62,7 @@ impl Blendshapes {
             let sigma = variance.sqrt() as f32;
             basis.extend(flat(u).into_iter().map(|x| x * sigma));
         }
+        basis.resize(components * dim, 0.0);
         Self::from_tensors(
             Tensor::from_vec(flat(pca.mean_shape()), (1, dim), &Device::Cpu)?,
             Tensor::from_vec(basis, (components, dim), &Device::Cpu)?,

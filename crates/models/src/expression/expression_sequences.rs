@@ -71,6 +71,34 @@ impl ExpressionSequences {
         Ok(())
     }
 
+    /// Splits off the last `count` subjects (with their sequences, subject indices
+    /// renumbered): `(kept, held out)`, subject-disjoint.
+    ///
+    /// ```
+    /// use meshgnn_models::expression::{ExpressionSequence, ExpressionSequences};
+    /// let q = |subject| ExpressionSequence { subject, expression: 0, labels: vec![[0.0; 6]], frames: vec![vec![[0.0; 3]]] };
+    /// let data = ExpressionSequences { neutrals: vec![vec![[0.0; 3]]; 3], sequences: vec![q(0), q(2), q(1)] };
+    /// let (kept, held) = data.hold_out_subjects(1);
+    /// assert_eq!((kept.neutrals.len(), kept.sequences.len()), (2, 2));
+    /// assert_eq!((held.neutrals.len(), held.sequences[0].subject), (1, 0));
+    /// ```
+    pub fn hold_out_subjects(&self, count: usize) -> (Self, Self) {
+        let first = self.neutrals.len().saturating_sub(count);
+        let part = |range: std::ops::Range<usize>| Self {
+            neutrals: self.neutrals[range.clone()].to_vec(),
+            sequences: self
+                .sequences
+                .iter()
+                .filter(|q| range.contains(&q.subject))
+                .map(|q| ExpressionSequence {
+                    subject: q.subject - range.start,
+                    ..q.clone()
+                })
+                .collect(),
+        };
+        (part(0..first), part(first..self.neutrals.len()))
+    }
+
     /// Number of frames over all sequences.
     pub fn frame_count(&self) -> usize {
         self.sequences.iter().map(|q| q.frames.len()).sum()

@@ -70,6 +70,25 @@ impl Pca {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn fit(template: &TriMesh, shapes: &[Vec<[f32; 3]>], latent: usize) -> Result<Self> {
+        Self::fit_components(template, shapes, latent, false)
+    }
+
+    /// [`Pca::fit`] keeping at most `latent` components: fewer when the shapes have fewer
+    /// components of non-zero variance.
+    pub(crate) fn fit_at_most(
+        template: &TriMesh,
+        shapes: &[Vec<[f32; 3]>],
+        latent: usize,
+    ) -> Result<Self> {
+        Self::fit_components(template, shapes, latent, true)
+    }
+
+    fn fit_components(
+        template: &TriMesh,
+        shapes: &[Vec<[f32; 3]>],
+        latent: usize,
+        at_most: bool,
+    ) -> Result<Self> {
         let v = template.vertex_count();
         let s = shapes.len();
         if s < 2 {
@@ -118,6 +137,11 @@ impl Pca {
             .iter()
             .take_while(|&&l| l > 1e-12 * top && l > 0.0)
             .count();
+        let latent = if at_most {
+            latent.min(rank).max(1)
+        } else {
+            latent
+        };
         if latent > rank {
             return Err(invalid(
                 "latent size",
