@@ -1,10 +1,11 @@
 //! # meshgnn-geometry
 //!
 //! Triangle meshes and point clouds for the rest of meshgnn: the [`TriMesh`] and
-//! [`PointCloud`] types, reading and writing OBJ, PLY, OFF, glTF/GLB and XYZ, and the
-//! geometric operators the thesis builds on (normals, curvature of eq. 5.1-5.3, graph and
-//! cotangent Laplacians of eq. 2.13-2.14, Laplacian eigenvectors, surface sampling,
-//! normalisation and validity checks). One operation per module, named after what it computes.
+//! [`PointCloud`] types, reading and writing OBJ, PLY, OFF, glTF/GLB and XYZ (and mesh
+//! animations as glTF morph targets, [`MorphAnimation`]), and the geometric operators the
+//! thesis builds on (normals, curvature of eq. 5.1-5.3, graph and cotangent Laplacians of
+//! eq. 2.13-2.14, Laplacian eigenvectors, surface sampling, normalisation and validity
+//! checks). One operation per module, named after what it computes.
 //!
 //! # Conventions
 //! - Positions are stored as `[f32; 3]`; numerically sensitive code accumulates in `f64`.
@@ -52,8 +53,9 @@ pub use error::{Error, Result};
 /// The faer version whose sparse and dense matrices this crate returns.
 pub use faer;
 pub use io::{
-    MeshFormat, OutputGuard, PlyEncoding, atomic_write, mesh_files_in, read_mesh, read_mesh_bytes,
-    read_point_cloud, read_point_cloud_bytes, remove_temporaries_on_interrupt, write_mesh,
+    MeshFormat, MorphAnimation, OutputGuard, PlyEncoding, atomic_write, mesh_files_in,
+    morph_animation_glb_bytes, read_mesh, read_mesh_bytes, read_morph_animation, read_point_cloud,
+    read_point_cloud_bytes, remove_temporaries_on_interrupt, write_mesh, write_morph_animation,
     write_ply, write_point_cloud,
 };
 pub use point_cloud::PointCloud;

@@ -10,29 +10,46 @@
 //! Buffers: the GLB binary chunk, base64 `data:` URIs, and (from a file only) external
 //! files inside the `.gltf`'s own folder, resolved by [`GltfBuffers`] (never the crate's
 //! `import`, which follows any path).
+//!
+//! The pieces are shared with the morph-animation reader and writer
+//! ([`super::morph_animation`]): [`load_document`], [`read_primitive`], [`append_primitive`],
+//! [`ElementBudget`], [`read_floats`] and, for writing, [`add_primitive`].
 
 use super::format_error::format_error;
+use super::glb_builder::{BIN_CHUNK, GlbBuilder, JSON_CHUNK, ViewTarget};
 use super::gltf_buffers::GltfBuffers;
 use super::mesh_data::MeshData;
 use crate::error::Result;
 use gltf::Semantic;
 use gltf::accessor::{DataType, Dimensions};
+use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 use std::path::Path;
 
 /// Most node instances visited; guards against cycles and exponential instancing.
 const MAX_NODE_VISITS: usize = 1 << 20;
 /// Deepest node hierarchy followed.
-const MAX_DEPTH: usize = 256;
+pub(crate) const MAX_DEPTH: usize = 256;
 /// Most accessor elements (vertices, attributes and indices, over all instances) read per
 /// byte of buffer data. A file without reuse reads at most one element per byte (u8 indices;
 /// a float position takes 12); instancing and accessors sharing bytes repeat data, which
 /// this caps at 16 times so that a kilobyte of nodes cannot expand one mesh into terabytes:
 /// memory stays proportional to the input.
-const MAX_ELEMENTS_PER_BUFFER_BYTE: usize = 16;
+pub(crate) const MAX_ELEMENTS_PER_BUFFER_BYTE: usize = 16;
+
+/// A column-major 4×4 transform (`m[column][row]`, glTF's layout, §5.25 `node.matrix`).
+pub(crate) type Matrix = [[f64; 4]; 4];
+
+/// The identity transform.
+pub(crate) const IDENTITY: Matrix = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
 
 /// Splits a GLB container into its JSON chunk and optional binary chunk.
-fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [u8]>)> {
+pub(crate) fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [u8]>)> {
     let word = |at: usize| -> Option<u32> {
         bytes
             .get(at..at + 4)
@@ -75,11 +92,8 @@ fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [
         at = end;
     }
     match chunks.as_slice() {
-        [(0x4E4F_534A, json), rest @ ..] => {
-            let bin = rest
-                .iter()
-                .find(|(k, _)| *k == 0x004E_4942)
-                .map(|(_, b)| *b);
+        [(JSON_CHUNK, json), rest @ ..] => {
+            let bin = rest.iter().find(|(k, _)| *k == BIN_CHUNK).map(|(_, b)| *b);
             Ok((json, bin))
         }
         _ => Err(format_error(
@@ -90,15 +104,14 @@ fn split_glb<'a>(bytes: &'a [u8], path: &Path) -> Result<(&'a [u8], Option<&'a [
     }
 }
 
-/// Reads glTF or GLB bytes. `base` is the glTF file's folder, the only place external
-/// buffers may come from (`None`: bytes from memory, external buffers are an error). With `points_ok`, non-triangle primitives
-/// contribute their vertices instead of failing (for point clouds).
-pub(crate) fn read_gltf(
-    bytes: &[u8],
+/// Parses glTF or GLB `bytes` into the validated document and the bytes of its buffers.
+/// `base` is the glTF file's folder, the only place external buffers may come from (`None`:
+/// bytes from memory, external buffers are an error).
+pub(crate) fn load_document<'a>(
+    bytes: &'a [u8],
     path: &Path,
     base: Option<&Path>,
-    points_ok: bool,
-) -> Result<MeshData> {
+) -> Result<(gltf::Document, GltfBuffers<'a>)> {
     let (json, blob) = if bytes.starts_with(b"glTF") {
         split_glb(bytes, path)?
     } else {
@@ -106,13 +119,22 @@ pub(crate) fn read_gltf(
     };
     let root = gltf::json::Root::from_slice(json)
         .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
-    // gltf-json's validation indexes `accessors[POSITION]` before checking the index
-    // (a panic on hostile files), so that one reference is checked here first.
+    check_unvalidated_references(&root, path)?;
+    let document = gltf::Document::from_json(root)
+        .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
+    let buffers = GltfBuffers::load(&document, blob, path, base)?;
+    Ok((document, buffers))
+}
+
+/// Checks the references that `gltf` would follow into a panic on a hostile file: gltf-json's
+/// validation indexes `accessors[POSITION]` before checking the index, and it does not check
+/// an animation channel's target at all (`Target::node` and `Target::property` unwrap it).
+fn check_unvalidated_references(root: &gltf::json::Root, path: &Path) -> Result<()> {
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive
                 .attributes
-                .get(&gltf::json::validation::Checked::Valid(Semantic::Positions));
+                .get(&Checked::Valid(Semantic::Positions));
             if let Some(index) = position.filter(|i| i.value() >= root.accessors.len()) {
                 return Err(format_error(
                     path,
@@ -122,31 +144,49 @@ pub(crate) fn read_gltf(
             }
         }
     }
-    let document = gltf::Document::from_json(root)
-        .map_err(|e| format_error(path, "glTF document", e.to_string()))?;
-    let buffers = GltfBuffers::load(&document, blob, path, base)?;
-    let budget = buffers
-        .total_len()
-        .saturating_mul(MAX_ELEMENTS_PER_BUFFER_BYTE);
-    let mut spent = 0usize;
-    let mut instances: Vec<(gltf::Mesh, [[f64; 4]; 4])> = Vec::new();
-    let identity = [
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let refuse = |message: String| {
+                format_error(path, format!("channel {c} of animation {a}"), message)
+            };
+            let node = channel.target.node.value();
+            if node >= root.nodes.len() {
+                return Err(refuse(format!("target node {node} does not exist")));
+            }
+            if channel.target.path == Checked::Invalid {
+                return Err(refuse(
+                    "target path is none of translation, rotation, scale, weights".into(),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads glTF or GLB bytes. `base` is the glTF file's folder, the only place external
+/// buffers may come from (`None`: bytes from memory, external buffers are an error). With
+/// `points_ok`, non-triangle primitives contribute their vertices instead of failing (for
+/// point clouds).
+pub(crate) fn read_gltf(
+    bytes: &[u8],
+    path: &Path,
+    base: Option<&Path>,
+    points_ok: bool,
+) -> Result<MeshData> {
+    let (document, buffers) = load_document(bytes, path, base)?;
+    let mut budget = ElementBudget::new(&buffers);
+    let mut instances: Vec<(gltf::Mesh, Matrix)> = Vec::new();
     let scenes: Vec<gltf::Scene> = match document.default_scene() {
         Some(scene) => vec![scene],
         None => document.scenes().collect(),
     };
     if scenes.is_empty() {
-        instances.extend(document.meshes().map(|m| (m, identity)));
+        instances.extend(document.meshes().map(|m| (m, IDENTITY)));
     }
     let mut visits = 0usize;
     for scene in scenes {
-        let mut stack: Vec<(gltf::Node, [[f64; 4]; 4], usize)> =
-            scene.nodes().map(|n| (n, identity, 0)).collect();
+        let mut stack: Vec<(gltf::Node, Matrix, usize)> =
+            scene.nodes().map(|n| (n, IDENTITY, 0)).collect();
         while let Some((node, parent, depth)) = stack.pop() {
             visits += 1;
             if visits > MAX_NODE_VISITS || depth > MAX_DEPTH {
@@ -156,8 +196,7 @@ pub(crate) fn read_gltf(
                     "node hierarchy too deep or too many instances (a cycle?)",
                 ));
             }
-            let local = node.transform().matrix().map(|c| c.map(f64::from));
-            let world = multiply(&parent, &local);
+            let world = multiply(&parent, &local_transform(&node));
             if let Some(mesh) = node.mesh() {
                 instances.push((mesh, world));
             }
@@ -166,141 +205,228 @@ pub(crate) fn read_gltf(
             stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
         }
     }
-    let mut out = MeshData::default();
-    let (mut all_normals, mut all_uvs, mut all_colors) = (true, true, true);
-    let (mut normals, mut uvs, mut colors) = (Vec::new(), Vec::new(), Vec::new());
+    let mut merged = None;
     for (mesh, world) in &instances {
         for primitive in mesh.primitives() {
-            let element = format!("primitive {} of mesh {}", primitive.index(), mesh.index());
-            let fail = |message: String| format_error(path, element.clone(), message);
-            // Charges every accessor this primitive reads against the budget, before reading.
-            let accessors = [
-                primitive.get(&Semantic::Positions),
-                primitive.get(&Semantic::Normals),
-                primitive.get(&Semantic::TexCoords(0)),
-                primitive.get(&Semantic::Colors(0)),
-                primitive.indices(),
-            ];
-            spent = accessors
-                .iter()
-                .flatten()
-                .fold(spent, |sum, a| sum.saturating_add(a.count()));
-            if spent > budget {
-                return Err(fail(format!(
-                    "instancing and shared accessors read over {budget} elements, \
-                     {MAX_ELEMENTS_PER_BUFFER_BYTE} per byte of buffer data"
-                )));
-            }
-            let mode = primitive.mode();
-            let triangles_mode = matches!(
-                mode,
-                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-            );
-            if !triangles_mode && !points_ok {
-                return Err(fail(format!("mode {mode:?} is not a triangle mode")));
-            }
-            let positions_accessor = primitive
-                .get(&Semantic::Positions)
-                .ok_or_else(|| fail("has no POSITION attribute".into()))?;
-            let positions: Vec<[f32; 3]> = read_floats(&positions_accessor, &buffers)
-                .map_err(|m| fail(format!("POSITION: {m}")))?;
-            let base_index = out.vertices.len();
-            let offset =
-                u32::try_from(base_index).map_err(|_| fail("more than 2^32 vertices".into()))?;
-            let count = positions.len();
-            out.vertices
-                .extend(positions.iter().map(|p| transform_point(world, p)));
-            match primitive.get(&Semantic::Normals) {
-                Some(a) => {
-                    let n: Vec<[f32; 3]> =
-                        read_floats(&a, &buffers).map_err(|m| fail(format!("NORMAL: {m}")))?;
-                    check_count(n.len(), count).map_err(|m| fail(format!("NORMAL: {m}")))?;
-                    normals.extend(n.iter().map(|n| transform_normal(world, n)));
-                }
-                None => all_normals = false,
-            }
-            match primitive.get(&Semantic::TexCoords(0)) {
-                Some(a) => {
-                    let t: Vec<[f32; 2]> =
-                        read_floats(&a, &buffers).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
-                    check_count(t.len(), count).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
-                    uvs.extend(t);
-                }
-                None => all_uvs = false,
-            }
-            match primitive.get(&Semantic::Colors(0)) {
-                Some(a) => {
-                    let c: Vec<[f32; 3]> = if a.dimensions() == Dimensions::Vec4 {
-                        let c4: Vec<[f32; 4]> =
-                            read_floats(&a, &buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?;
-                        c4.into_iter().map(|c| [c[0], c[1], c[2]]).collect()
+            let fail = |message| format_error(path, primitive_element(&primitive, mesh), message);
+            budget.charge_primitive(&primitive).map_err(fail)?;
+            let part = read_primitive(&primitive, mesh, &buffers, world, points_ok, path)?;
+            append_primitive(&mut merged, part).map_err(fail)?;
+        }
+    }
+    Ok(merged.unwrap_or_default())
+}
+
+/// `primitive P of mesh M`, how errors name a primitive.
+pub(crate) fn primitive_element(primitive: &gltf::Primitive, mesh: &gltf::Mesh) -> String {
+    format!("primitive {} of mesh {}", primitive.index(), mesh.index())
+}
+
+/// The accessor elements a reader may still read, charged before each read: at most
+/// [`MAX_ELEMENTS_PER_BUFFER_BYTE`] per byte of buffer data, so that instancing, accessors
+/// sharing bytes or keyframes reusing morph targets cannot make memory outgrow the input.
+#[derive(Debug)]
+pub(crate) struct ElementBudget {
+    limit: usize,
+    spent: usize,
+}
+
+impl ElementBudget {
+    /// The budget of a document whose buffers are `buffers`.
+    pub(crate) fn new(buffers: &GltfBuffers<'_>) -> Self {
+        Self {
+            limit: buffers
+                .total_len()
+                .saturating_mul(MAX_ELEMENTS_PER_BUFFER_BYTE),
+            spent: 0,
+        }
+    }
+
+    /// Charges `elements` about to be read or produced; over the limit, the error message,
+    /// naming `what` is being read.
+    pub(crate) fn charge(
+        &mut self,
+        elements: usize,
+        what: &str,
+    ) -> std::result::Result<(), String> {
+        self.spent = self.spent.saturating_add(elements);
+        if self.spent > self.limit {
+            return Err(format!(
+                "{what} read over {} elements, {MAX_ELEMENTS_PER_BUFFER_BYTE} per byte of \
+                 buffer data",
+                self.limit
+            ));
+        }
+        Ok(())
+    }
+
+    /// Charges every accessor [`read_primitive`] reads of `primitive`.
+    pub(crate) fn charge_primitive(
+        &mut self,
+        primitive: &gltf::Primitive,
+    ) -> std::result::Result<(), String> {
+        let accessors = [
+            primitive.get(&Semantic::Positions),
+            primitive.get(&Semantic::Normals),
+            primitive.get(&Semantic::TexCoords(0)),
+            primitive.get(&Semantic::Colors(0)),
+            primitive.indices(),
+        ];
+        let elements = accessors
+            .iter()
+            .flatten()
+            .fold(0usize, |sum, a| sum.saturating_add(a.count()));
+        self.charge(elements, "instancing and shared accessors")
+    }
+}
+
+/// Reads one primitive of `mesh` placed by `world`: positions transformed, normals by the
+/// inverse-transpose, uvs and colours as they are (`TEXCOORD_0`, `COLOR_0`), strips and fans
+/// converted to triangles, winding flipped under a mirroring transform. Vertices keep the
+/// order of the `POSITION` accessor. A non-triangle mode is an error unless `points_ok` (then
+/// the primitive gives its vertices and no triangles). Errors name `primitive P of mesh M`.
+pub(crate) fn read_primitive(
+    primitive: &gltf::Primitive,
+    mesh: &gltf::Mesh,
+    buffers: &GltfBuffers<'_>,
+    world: &Matrix,
+    points_ok: bool,
+    path: &Path,
+) -> Result<MeshData> {
+    let fail = |message: String| format_error(path, primitive_element(primitive, mesh), message);
+    let mode = primitive.mode();
+    let triangles_mode = matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    );
+    if !triangles_mode && !points_ok {
+        return Err(fail(format!("mode {mode:?} is not a triangle mode")));
+    }
+    let positions_accessor = primitive
+        .get(&Semantic::Positions)
+        .ok_or_else(|| fail("has no POSITION attribute".into()))?;
+    let positions: Vec<[f32; 3]> =
+        read_floats(&positions_accessor, buffers).map_err(|m| fail(format!("POSITION: {m}")))?;
+    let count = positions.len();
+    let mut part = MeshData {
+        vertices: positions
+            .iter()
+            .map(|p| transform_point(world, p))
+            .collect(),
+        ..MeshData::default()
+    };
+    if let Some(a) = primitive.get(&Semantic::Normals) {
+        let n: Vec<[f32; 3]> =
+            read_floats(&a, buffers).map_err(|m| fail(format!("NORMAL: {m}")))?;
+        check_count(n.len(), count).map_err(|m| fail(format!("NORMAL: {m}")))?;
+        part.normals = Some(n.iter().map(|n| transform_normal(world, n)).collect());
+    }
+    if let Some(a) = primitive.get(&Semantic::TexCoords(0)) {
+        let t: Vec<[f32; 2]> =
+            read_floats(&a, buffers).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
+        check_count(t.len(), count).map_err(|m| fail(format!("TEXCOORD_0: {m}")))?;
+        part.uvs = Some(t);
+    }
+    if let Some(a) = primitive.get(&Semantic::Colors(0)) {
+        let c: Vec<[f32; 3]> = if a.dimensions() == Dimensions::Vec4 {
+            let c4: Vec<[f32; 4]> =
+                read_floats(&a, buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?;
+            c4.into_iter().map(|c| [c[0], c[1], c[2]]).collect()
+        } else {
+            read_floats(&a, buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?
+        };
+        check_count(c.len(), count).map_err(|m| fail(format!("COLOR_0: {m}")))?;
+        part.colors = Some(c);
+    }
+    if !triangles_mode {
+        return Ok(part);
+    }
+    let indices: Vec<u32> = match primitive.indices() {
+        Some(a) => read_indices(&a, buffers).map_err(|m| fail(format!("indices: {m}")))?,
+        None => (0..u32::try_from(count).map_err(|_| fail("too many vertices".into()))?).collect(),
+    };
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(fail(format!("index {bad} out of range ({count} vertices)")));
+    }
+    let mirrored = determinant3(world) < 0.0;
+    let triangles = &mut part.triangles;
+    let mut push = |a: u32, b: u32, c: u32| {
+        triangles.push(if mirrored { [a, c, b] } else { [a, b, c] });
+    };
+    match mode {
+        Mode::TriangleStrip => {
+            for (i, w) in indices.windows(3).enumerate() {
+                if let [a, b, c] = *w {
+                    if i % 2 == 0 {
+                        push(a, b, c)
                     } else {
-                        read_floats(&a, &buffers).map_err(|m| fail(format!("COLOR_0: {m}")))?
-                    };
-                    check_count(c.len(), count).map_err(|m| fail(format!("COLOR_0: {m}")))?;
-                    colors.extend(c);
-                }
-                None => all_colors = false,
-            }
-            if !triangles_mode {
-                continue;
-            }
-            let indices: Vec<u32> = match primitive.indices() {
-                Some(a) => read_indices(&a, &buffers).map_err(|m| fail(format!("indices: {m}")))?,
-                None => (0..u32::try_from(count).map_err(|_| fail("too many vertices".into()))?)
-                    .collect(),
-            };
-            if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
-                return Err(fail(format!("index {bad} out of range ({count} vertices)")));
-            }
-            let mirrored = determinant3(world) < 0.0;
-            let mut push = |a: u32, b: u32, c: u32| {
-                let t = [a + offset, b + offset, c + offset];
-                out.triangles
-                    .push(if mirrored { [t[0], t[2], t[1]] } else { t });
-            };
-            match mode {
-                Mode::TriangleStrip => {
-                    for (i, w) in indices.windows(3).enumerate() {
-                        if let [a, b, c] = *w {
-                            if i % 2 == 0 {
-                                push(a, b, c)
-                            } else {
-                                push(b, a, c)
-                            }
-                        }
-                    }
-                }
-                Mode::TriangleFan => {
-                    if let Some((&first, rest)) = indices.split_first() {
-                        for w in rest.windows(2) {
-                            if let [b, c] = *w {
-                                push(first, b, c);
-                            }
-                        }
-                    }
-                }
-                _ => {
-                    if !indices.len().is_multiple_of(3) {
-                        return Err(fail(format!(
-                            "{} indices is not a multiple of 3",
-                            indices.len()
-                        )));
-                    }
-                    for t in indices.chunks_exact(3) {
-                        if let [a, b, c] = *t {
-                            push(a, b, c);
-                        }
+                        push(b, a, c)
                     }
                 }
             }
         }
+        Mode::TriangleFan => {
+            if let Some((&first, rest)) = indices.split_first() {
+                for w in rest.windows(2) {
+                    if let [b, c] = *w {
+                        push(first, b, c);
+                    }
+                }
+            }
+        }
+        _ => {
+            if !indices.len().is_multiple_of(3) {
+                return Err(fail(format!(
+                    "{} indices is not a multiple of 3",
+                    indices.len()
+                )));
+            }
+            for t in indices.chunks_exact(3) {
+                if let [a, b, c] = *t {
+                    push(a, b, c);
+                }
+            }
+        }
     }
-    let any = !instances.is_empty();
-    out.normals = (any && all_normals).then_some(normals);
-    out.uvs = (any && all_uvs).then_some(uvs);
-    out.colors = (any && all_colors).then_some(colors);
-    Ok(out)
+    Ok(part)
+}
+
+/// Appends one primitive's content to `merged` (`None` before the first): its vertices, its
+/// triangles renumbered past the vertices already there, and each attribute kept only while
+/// every primitive has it.
+pub(crate) fn append_primitive(
+    merged: &mut Option<MeshData>,
+    part: MeshData,
+) -> std::result::Result<(), String> {
+    let Some(out) = merged else {
+        *merged = Some(part);
+        return Ok(());
+    };
+    let too_many = || "the primitives hold more than 2^32 vertices".to_string();
+    let total = out.vertices.len().checked_add(part.vertices.len());
+    total
+        .and_then(|total| u32::try_from(total).ok())
+        .ok_or_else(too_many)?;
+    // `offset + index` stays below the total, which fits in u32.
+    let offset = u32::try_from(out.vertices.len()).map_err(|_| too_many())?;
+    out.vertices.extend(part.vertices);
+    out.triangles
+        .extend(part.triangles.iter().map(|t| t.map(|v| v + offset)));
+    out.normals = concatenated(out.normals.take(), part.normals);
+    out.uvs = concatenated(out.uvs.take(), part.uvs);
+    out.colors = concatenated(out.colors.take(), part.colors);
+    Ok(())
+}
+
+/// `a` followed by `b` when both exist.
+fn concatenated<T>(a: Option<Vec<T>>, b: Option<Vec<T>>) -> Option<Vec<T>> {
+    match (a, b) {
+        (Some(mut a), Some(b)) => {
+            a.extend(b);
+            Some(a)
+        }
+        _ => None,
+    }
 }
 
 fn check_count(got: usize, expected: usize) -> std::result::Result<(), String> {
@@ -369,7 +495,7 @@ fn accessor_bytes<'b>(
 }
 
 /// Reads an accessor of `N`-vectors of floats (or normalised unsigned integers).
-fn read_floats<const N: usize>(
+pub(crate) fn read_floats<const N: usize>(
     accessor: &gltf::Accessor,
     buffers: &GltfBuffers<'_>,
 ) -> std::result::Result<Vec<[f32; N]>, String> {
@@ -447,22 +573,34 @@ fn read_indices(
         .collect())
 }
 
+/// A node's own transform (its `matrix`, or translation · rotation · scale), §3.5.3.
+pub(crate) fn local_transform(node: &gltf::Node) -> Matrix {
+    node.transform().matrix().map(|c| c.map(f64::from))
+}
+
 /// `a · b` for column-major 4×4 matrices (`m[column][row]`, glTF's layout).
-fn multiply(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
+pub(crate) fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
     std::array::from_fn(|col| {
         std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[col][k]).sum())
     })
 }
 
-fn transform_point(m: &[[f64; 4]; 4], p: &[f32; 3]) -> [f32; 3] {
+/// `m · (p, 1)`: a position placed by `m`.
+pub(crate) fn transform_point(m: &Matrix, p: &[f32; 3]) -> [f32; 3] {
     let p = p.map(f64::from);
     std::array::from_fn(|row| {
         (m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row]) as f32
     })
 }
 
+/// `m · (v, 0)`: a displacement placed by `m` (its 3×3 part; no translation).
+pub(crate) fn transform_vector(m: &Matrix, v: &[f32; 3]) -> [f32; 3] {
+    let v = v.map(f64::from);
+    std::array::from_fn(|row| (m[0][row] * v[0] + m[1][row] * v[1] + m[2][row] * v[2]) as f32)
+}
+
 /// The 3×3 part's determinant (negative for a mirroring transform).
-fn determinant3(m: &[[f64; 4]; 4]) -> f64 {
+fn determinant3(m: &Matrix) -> f64 {
     let e = |r: usize, c: usize| m[c][r];
     e(0, 0) * (e(1, 1) * e(2, 2) - e(1, 2) * e(2, 1))
         - e(0, 1) * (e(1, 0) * e(2, 2) - e(1, 2) * e(2, 0))
@@ -471,7 +609,7 @@ fn determinant3(m: &[[f64; 4]; 4]) -> f64 {
 
 /// Transforms a normal by the inverse-transpose of the 3×3 part (the cofactor matrix, up to
 /// the determinant's positive scale and sign) and renormalises it.
-fn transform_normal(m: &[[f64; 4]; 4], n: &[f32; 3]) -> [f32; 3] {
+fn transform_normal(m: &Matrix, n: &[f32; 3]) -> [f32; 3] {
     let e = |r: usize, c: usize| m[c][r];
     // cof[r][c] = cofactor of entry (r, c).
     let cof = |r: usize, c: usize| {
@@ -491,141 +629,54 @@ fn transform_normal(m: &[[f64; 4]; 4], n: &[f32; 3]) -> [f32; 3] {
     }
 }
 
-/// Encodes a mesh as GLB: one node, one primitive (`TRIANGLES`, or `POINTS` without
-/// faces), f32 positions with min/max, normals/uvs/colours when present, u32 indices.
-pub(crate) fn write_glb_bytes(mesh: &MeshData) -> Vec<u8> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
+/// Adds `mesh`'s vertex data to `glb` and returns the JSON members of its primitive:
+/// `attributes` (`POSITION` f32 with min/max, and `NORMAL`, `TEXCOORD_0`, `COLOR_0` when the
+/// mesh has them), `indices` (u32) and `mode` (`TRIANGLES`, or `POINTS` without faces).
+/// `mesh` has at least one vertex.
+pub(crate) fn add_primitive(glb: &mut GlbBuilder, mesh: &MeshData) -> Vec<String> {
     let mut attributes = Vec::new();
-    let count = mesh.vertices.len();
-    let mut add = |bin: &mut Vec<u8>, data: Vec<u8>, accessor: String, target: u32| {
-        let offset = bin.len();
-        let length = data.len();
-        bin.extend(data);
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        views.push(format!(
-            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{length},"target":{target}}}"#
-        ));
-        accessors.push(accessor.replace("VIEW", &(views.len() - 1).to_string()));
-        accessors.len() - 1
-    };
-    let floats = |values: &mut dyn Iterator<Item = f32>| -> Vec<u8> {
-        values.flat_map(f32::to_le_bytes).collect()
-    };
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for v in &mesh.vertices {
-        for k in 0..3 {
-            min[k] = min[k].min(v[k]);
-            max[k] = max[k].max(v[k]);
-        }
+    let p = glb.add_floats(&mesh.vertices, true, ViewTarget::Vertices);
+    attributes.push(format!(r#""POSITION":{p}"#));
+    if let Some(normals) = &mesh.normals {
+        let n = glb.add_floats(normals, false, ViewTarget::Vertices);
+        attributes.push(format!(r#""NORMAL":{n}"#));
     }
-    if count > 0 {
-        let p = add(
-            &mut bin,
-            floats(&mut mesh.vertices.iter().flatten().copied()),
-            format!(
-                r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3","min":[{:?},{:?},{:?}],"max":[{:?},{:?},{:?}]}}"#,
-                min[0], min[1], min[2], max[0], max[1], max[2]
-            ),
-            34962,
-        );
-        attributes.push(format!(r#""POSITION":{p}"#));
-        if let Some(normals) = &mesh.normals {
-            let n = add(
-                &mut bin,
-                floats(&mut normals.iter().flatten().copied()),
-                format!(
-                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3"}}"#
-                ),
-                34962,
-            );
-            attributes.push(format!(r#""NORMAL":{n}"#));
-        }
-        if let Some(uvs) = &mesh.uvs {
-            let t = add(
-                &mut bin,
-                floats(&mut uvs.iter().flatten().copied()),
-                format!(
-                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC2"}}"#
-                ),
-                34962,
-            );
-            attributes.push(format!(r#""TEXCOORD_0":{t}"#));
-        }
-        if let Some(colors) = &mesh.colors {
-            let c = add(
-                &mut bin,
-                floats(&mut colors.iter().flatten().copied()),
-                format!(
-                    r#"{{"bufferView":VIEW,"componentType":5126,"count":{count},"type":"VEC3"}}"#
-                ),
-                34962,
-            );
-            attributes.push(format!(r#""COLOR_0":{c}"#));
-        }
+    if let Some(uvs) = &mesh.uvs {
+        let t = glb.add_floats(uvs, false, ViewTarget::Vertices);
+        attributes.push(format!(r#""TEXCOORD_0":{t}"#));
     }
-    let mut primitive = format!(r#"{{"attributes":{{{}}}"#, attributes.join(","));
+    if let Some(colors) = &mesh.colors {
+        let c = glb.add_floats(colors, false, ViewTarget::Vertices);
+        attributes.push(format!(r#""COLOR_0":{c}"#));
+    }
+    let mut members = vec![format!(r#""attributes":{{{}}}"#, attributes.join(","))];
     if mesh.triangles.is_empty() {
-        primitive += r#","mode":0}"#;
+        members.push(r#""mode":0"#.to_owned());
     } else {
-        let indices = mesh.triangles.len() * 3;
-        let i = add(
-            &mut bin,
-            mesh.triangles
-                .iter()
-                .flatten()
-                .flat_map(|i| i.to_le_bytes())
-                .collect(),
-            format!(
-                r#"{{"bufferView":VIEW,"componentType":5125,"count":{indices},"type":"SCALAR"}}"#
-            ),
-            34963,
-        );
-        primitive += &format!(r#","indices":{i},"mode":4}}"#);
+        let i = glb.add_indices(&mesh.triangles);
+        members.push(format!(r#""indices":{i}"#));
+        members.push(r#""mode":4"#.to_owned());
     }
-    let (meshes, nodes) = if count > 0 {
-        (
-            format!(r#","meshes":[{{"primitives":[{primitive}]}}]"#),
-            r#"[{"mesh":0}]"#,
-        )
+    members
+}
+
+/// Encodes a mesh as GLB: one node, one primitive (see [`add_primitive`]); a mesh without
+/// vertices is a scene with one empty node. Fails (with the reason) beyond the 4 GiB a GLB
+/// can hold.
+pub(crate) fn write_glb_bytes(mesh: &MeshData) -> std::result::Result<Vec<u8>, String> {
+    let mut glb = GlbBuilder::default();
+    let mut members = vec![
+        r#""scene":0"#.to_owned(),
+        r#""scenes":[{"nodes":[0]}]"#.to_owned(),
+    ];
+    if mesh.vertices.is_empty() {
+        members.push(r#""nodes":[{}]"#.to_owned());
     } else {
-        (String::new(), "[{}]")
-    };
-    let buffers = if bin.is_empty() {
-        String::new()
-    } else {
-        format!(
-            r#","buffers":[{{"byteLength":{}}}],"bufferViews":[{}],"accessors":[{}]"#,
-            bin.len(),
-            views.join(","),
-            accessors.join(",")
-        )
-    };
-    let mut json = format!(
-        r#"{{"asset":{{"version":"2.0","generator":"meshgnn-geometry"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":{nodes}{meshes}{buffers}}}"#
-    )
-    .into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
+        let primitive = add_primitive(&mut glb, mesh).join(",");
+        members.push(r#""nodes":[{"mesh":0}]"#.to_owned());
+        members.push(format!(r#""meshes":[{{"primitives":[{{{primitive}}}]}}]"#));
     }
-    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
-    out.extend(json);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-        out.extend(bin);
-    }
-    out
+    glb.finish(&members)
 }
 
 #[cfg(test)]
@@ -793,7 +844,7 @@ mod tests {
             normals: Some(vec![[0.0, 0.0, 1.0]; 3]),
             ..MeshData::default()
         };
-        let glb = write_glb_bytes(&mesh);
+        let glb = write_glb_bytes(&mesh).unwrap();
         assert_eq!(&glb[..4], b"glTF");
         assert_eq!(glb.len() % 4, 0);
         assert_eq!(
@@ -819,7 +870,8 @@ mod tests {
             vertices: vec![[0.0; 3]; 3],
             triangles: vec![[0, 1, 2]],
             ..MeshData::default()
-        });
+        })
+        .unwrap();
         let mut short = glb.clone();
         short[8..12].copy_from_slice(&4u32.to_le_bytes());
         let mut long = glb.clone();

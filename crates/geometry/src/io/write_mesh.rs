@@ -15,7 +15,12 @@ pub(crate) fn encode(mesh: &MeshData, format: MeshFormat, path: &Path) -> Result
         MeshFormat::Obj => obj::write_obj_bytes(mesh),
         MeshFormat::Ply => ply::write_ply_bytes(mesh, PlyEncoding::BinaryLittleEndian),
         MeshFormat::Off => off::write_off_bytes(mesh),
-        MeshFormat::Glb => gltf::write_glb_bytes(mesh),
+        MeshFormat::Glb => {
+            gltf::write_glb_bytes(mesh).map_err(|message| Error::InvalidParameter {
+                name: "mesh",
+                message: format!("{}: {message}", path.display()),
+            })?
+        }
         MeshFormat::Xyz => xyz::write_xyz_bytes(mesh),
         MeshFormat::Gltf => {
             return Err(Error::InvalidParameter {
