@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! synth hands  -n 1200 --seed 0 -o data/hands  [--preview hands.png]
-//! synth faces  -n 180  --seed 0 -o data/faces  [--preview faces.png]
+//! synth faces  -n 60   --seed 0 -o data/faces  [--preview faces.png]   (--full: 180 subjects)
 //! synth shapes         --seed 0 -o data/shapes [--preview shapes.png]
 //! ```
 
@@ -25,6 +25,9 @@ use meshgnn_data::{
 use meshgnn_geometry::{TriMesh, check_count, write_mesh, write_point_cloud};
 use rayon::prelude::*;
 use serde_json::json;
+
+/// Subjects of `synth faces --full`: 4DFAB's 180 (153 train / 27 test, thesis ch. 4.4.1).
+const FULL_FACE_SUBJECTS: usize = 180;
 
 /// Synthetic datasets for meshgnn.
 #[derive(Parser)]
@@ -57,11 +60,16 @@ enum Command {
         #[arg(long)]
         preview: Option<PathBuf>,
     },
-    /// 4D faces: six expression sequences per subject (thesis ch. 4, 4DFAB-like).
+    /// 4D faces: six expression sequences per subject (thesis ch. 4, 4DFAB-like). The default
+    /// 60 subjects (51 train / 9 test, ≈ 1.1 GB) train on a laptop; `--full` writes the
+    /// thesis-size set (180 subjects, 153 / 27, ≈ 3.4 GB).
     Faces {
         /// Number of subjects (27 of 180 held out for test, proportionally otherwise).
-        #[arg(short = 'n', long, default_value_t = 180)]
+        #[arg(short = 'n', long, default_value_t = 60, conflicts_with = "full")]
         count: usize,
+        /// The thesis-size set: 180 subjects, 153 train / 27 test (as 4DFAB, ch. 4.4.1).
+        #[arg(long)]
+        full: bool,
         /// Seed of every random choice.
         #[arg(long, default_value_t = 0)]
         seed: u64,
@@ -71,7 +79,8 @@ enum Command {
         /// Keep every k-th frame of the 60-100 frame sequences.
         #[arg(long, default_value_t = 5)]
         frame_step: usize,
-        /// Write a PNG contact sheet of apex frames.
+        /// Write a PNG contact sheet: the neutral face and the six apex frames of the first
+        /// two subjects (keep --frame-step at most 5 so every apex plateau has a frame).
         #[arg(long)]
         preview: Option<PathBuf>,
     },
@@ -117,8 +126,18 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 fn preview(path: &Option<PathBuf>, meshes: &[TriMesh], view: View) -> Result<()> {
+    preview_sheet(path, meshes, 4, 256, view)
+}
+
+fn preview_sheet(
+    path: &Option<PathBuf>,
+    meshes: &[TriMesh],
+    columns: u32,
+    tile: u32,
+    view: View,
+) -> Result<()> {
     if let Some(path) = path {
-        write_png(path, &contact_sheet(meshes, 4, 256, view)?)?;
+        write_png(path, &contact_sheet(meshes, columns, tile, view)?)?;
         eprintln!("preview: {}", path.display());
     }
     Ok(())
@@ -248,13 +267,14 @@ fn faces(
         .map(|i| -> Result<Done> {
             let s = cfg.subject(&template, i)?;
             let neutral = format!("{}_neutral.ply", s.name);
-            write_mesh(
-                output.join(&neutral),
-                &TriMesh::new(s.neutral.clone(), tri.clone())?,
-            )?;
+            let neutral_mesh = TriMesh::new(s.neutral.clone(), tri.clone())?;
+            write_mesh(output.join(&neutral), &neutral_mesh)?;
             let mut frames = Vec::new();
             let mut stats = Vec::new();
             let mut apex = Vec::new();
+            if i < PREVIEW_SUBJECTS {
+                apex.push(neutral_mesh);
+            }
             for q in &s.sequences {
                 stats.push((q.expression, q.mean_abs_deformation, q.extremeness));
                 let best = q
@@ -267,7 +287,7 @@ fn faces(
                     let name = format!("{}_{}_f{frame:03}.ply", s.name, q.expression.name());
                     let mesh = TriMesh::new(verts.clone(), tri.clone())?;
                     write_mesh(output.join(&name), &mesh)?;
-                    if i < 2 && Some(k) == best && apex.len() < 4 {
+                    if i < PREVIEW_SUBJECTS && Some(k) == best {
                         apex.push(mesh);
                     }
                     frames.push((name, s.split, q.expression, *frame, q.motion[k]));
@@ -332,15 +352,41 @@ fn faces(
         labels,
     };
     write_manifest(output, &manifest)?;
-    previews.truncate(8);
-    preview(
+    let (files, bytes) = folder_size(output)?;
+    eprintln!(
+        "faces: {count} subjects ({} train / {} test), {files} files, {:.2} GB in {}",
+        count - cfg.test_subjects(),
+        cfg.test_subjects(),
+        bytes as f64 / 1e9,
+        output.display()
+    );
+    preview_sheet(
         preview_path,
         &previews,
+        1 + Expression::ALL.len() as u32,
+        320,
         View {
-            yaw: -20.0,
+            yaw: -15.0,
             pitch: 5.0,
         },
     )
+}
+
+/// Subjects whose neutral face and six apex frames make the `faces --preview` sheet.
+const PREVIEW_SUBJECTS: usize = 2;
+
+/// Number of files directly in `dir` and their total size in bytes.
+fn folder_size(dir: &Path) -> Result<(usize, u64)> {
+    let mut files = 0;
+    let mut bytes = 0;
+    for entry in std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))? {
+        let meta = entry?.metadata()?;
+        if meta.is_file() {
+            files += 1;
+            bytes += meta.len();
+        }
+    }
+    Ok((files, bytes))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -476,12 +522,14 @@ fn run(cli: &Cli) -> Result<()> {
         }
         Command::Faces {
             count,
+            full,
             seed,
             output,
             frame_step,
             preview,
         } => {
-            faces(*count, *seed, output, *frame_step, preview)?;
+            let count = if *full { FULL_FACE_SUBJECTS } else { *count };
+            faces(count, *seed, output, *frame_step, preview)?;
         }
         Command::Shapes {
             seed,

@@ -126,3 +126,18 @@ fn counts_out_of_range_are_refused_before_anything_is_written() {
         assert!(!output.exists(), "{args:?} wrote {}", output.display());
     }
 }
+
+/// `faces --full` is the thesis-size set; it cannot be combined with a subject count.
+#[test]
+fn faces_full_and_a_count_are_exclusive() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out");
+    let out = Command::new(env!("CARGO_BIN_EXE_synth"))
+        .args(["faces", "--full", "-n", "3", "-o"])
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--full"));
+    assert!(!output.exists());
+}

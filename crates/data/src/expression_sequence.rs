@@ -3,6 +3,9 @@
 //! frame's label is the one-hot expression scaled by the motion value, and the apex value is
 //! scaled per subject by the intensity `s_i` of eq. 4.3.
 //!
+//! Each subject performs the expressions in its own [`ExpressionStyle`] (gains per action,
+//! left/right imbalance, easing, wrinkles), on top of the per-sequence extremeness.
+//!
 //! Subjects are split subject-disjointly like 4DFAB in the thesis (153 train / 27 test of 180).
 
 use rand::Rng;
@@ -10,9 +13,13 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 
 use crate::error::{Result, invalid};
-use crate::expressions::{Expression, apply_actions};
+use crate::expression_style::ExpressionStyle;
+use crate::expressions::{Expression, apply_styled_actions};
 use crate::face_template::{FaceIdentity, FaceTemplate};
 use crate::vec3::item_seed;
+
+/// Stream tag of the per-subject style seed (`item_seed(item_seed(seed, index), tag)`).
+const STYLE_STREAM: u64 = 0x0053_5459_4C45;
 
 /// Frame timing of one sequence (frame indices, `0 ≤ onset < apex_start ≤ apex_end <
 /// offset_end < frames`).
@@ -138,7 +145,8 @@ pub struct FaceSequence {
     pub expression: Expression,
     /// Subject-dependent timing.
     pub timing: SequenceTiming,
-    /// Subject's extremeness in `[0.35, 1]` (scales the actions at the apex).
+    /// Subject's extremeness in `[0.35, 1]` (scales the actions at the apex, on top of the
+    /// subject's [`ExpressionStyle`]).
     pub extremeness: f64,
     /// Indices of the frames kept.
     pub frame_indices: Vec<usize>,
@@ -194,7 +202,23 @@ impl FaceSetConfig {
             .min(self.subjects.saturating_sub(1))
     }
 
-    /// Subject `index` (test subjects are the last [`FaceSetConfig::test_subjects`]).
+    /// The expression style of subject `index`: its own seeded stream, independent of the
+    /// identity and timing draws, so it is the same whatever the frame step.
+    ///
+    /// ```
+    /// use meshgnn_data::FaceSetConfig;
+    /// let cfg = FaceSetConfig::default();
+    /// assert_eq!(cfg.style(7), cfg.style(7));
+    /// assert_ne!(cfg.style(7), cfg.style(8));
+    /// ```
+    pub fn style(&self, index: usize) -> ExpressionStyle {
+        ExpressionStyle::random(item_seed(item_seed(self.seed, index as u64), STYLE_STREAM))
+    }
+
+    /// Subject `index` (test subjects are the last [`FaceSetConfig::test_subjects`]). Frame
+    /// `t` of a sequence is the neutral face deformed by
+    /// [`ExpressionStyle::actions_at`]`(apex, motion_t)` with `apex` = the expression's
+    /// actions × the subject's overall scale (0.85-1.15) × the sequence's extremeness.
     ///
     /// ```
     /// use meshgnn_data::{FaceSetConfig, FaceTemplate};
@@ -215,19 +239,27 @@ impl FaceSetConfig {
         let mut rng = StdRng::seed_from_u64(item_seed(self.seed, index as u64));
         let identity = FaceIdentity::random(rng.random());
         let neutral = template.neutral(&identity);
-        let style: f64 = rng.random_range(0.85..1.15);
+        let scale: f64 = rng.random_range(0.85..1.15);
+        let style = self.style(index);
         let sequences = Expression::ALL
             .iter()
             .map(|&expression| {
                 let timing = SequenceTiming::random(rng.random());
                 let extremeness = rng.random_range(0.35..1.0);
-                let actions = expression.actions().scaled(style * extremeness);
+                let apex = expression.actions().scaled(scale * extremeness);
                 let frame_indices: Vec<usize> =
                     (0..timing.frames).step_by(self.frame_step).collect();
                 let motion: Vec<f64> = frame_indices.iter().map(|&f| timing.motion(f)).collect();
                 let frames: Vec<Vec<[f32; 3]>> = motion
                     .iter()
-                    .map(|&m| apply_actions(template, &neutral, &actions.scaled(m)))
+                    .map(|&m| {
+                        apply_styled_actions(
+                            template,
+                            &neutral,
+                            &style.actions_at(&apex, m),
+                            &style,
+                        )
+                    })
                     .collect();
                 let mut total = 0.0;
                 for frame in &frames {

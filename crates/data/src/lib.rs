@@ -6,7 +6,8 @@
 //! - **Hands** (thesis ch. 3.3-3.4): one fixed-topology procedural template, per-subject
 //!   shape from age 1 to 81 (children's proportions, Table 3.2), and articulation.
 //! - **Faces** (thesis ch. 4.3-4.4): a head template with identity parameters, the six 4DFAB
-//!   expressions and 4D sequences with motion labels and the intensity scaling of eq. 4.3.
+//!   expressions as non-linear muscle-like actions, per-subject expression styles, and 4D
+//!   sequences with motion labels and the intensity scaling of eq. 4.3.
 //! - **Simplification shapes** (thesis ch. 5.5, 6.5): meshes from signed distance functions
 //!   (CAD-like solids, blended creatures), noisy scans (ch. 5.5.7), LiDAR-like point clouds,
 //!   with shape-family-disjoint splits.
@@ -26,6 +27,7 @@ mod count_bounds;
 mod error;
 mod expression_labels;
 mod expression_sequence;
+mod expression_style;
 mod expressions;
 mod face_template;
 mod folder_dataset;
@@ -48,7 +50,8 @@ pub use expression_labels::{ExpressionLabels, FrameLabel, SequenceStats};
 pub use expression_sequence::{
     FaceSequence, FaceSetConfig, FaceSubject, SequenceTiming, intensity_scale, intensity_scales,
 };
-pub use expressions::{Actions, Expression, apply_actions};
+pub use expression_style::ExpressionStyle;
+pub use expressions::{Actions, Expression, apply_actions, apply_styled_actions};
 pub use face_template::{FaceIdentity, FaceTemplate};
 pub use folder_dataset::{FolderDataset, MANIFEST_FILE, Manifest, write_dataset, write_manifest};
 pub use hand_dataset::{CHILD_AGE, HandSample, HandSetConfig, hand_splits};

@@ -1,7 +1,8 @@
 //! Invariants of the synthetic face set.
 
 use meshgnn_data::{
-    Expression, FaceIdentity, FaceSetConfig, FaceTemplate, apply_actions, self_intersections,
+    Actions, Expression, ExpressionStyle, FaceIdentity, FaceSetConfig, FaceTemplate, apply_actions,
+    apply_styled_actions, self_intersections,
 };
 use meshgnn_geometry::{TriMesh, boundary_loops, mesh_report};
 
@@ -61,5 +62,35 @@ fn subjects_are_deterministic_and_split_disjointly() {
     for s in &a.sequences {
         assert!((60..=100).contains(&s.timing.frames));
         assert!(s.motion.iter().all(|m| (0.0..=1.0).contains(m)));
+    }
+}
+
+#[test]
+fn every_style_performs_without_self_intersections() {
+    // Random subjects' styles and a style at every bound (strongest gains, most lopsided,
+    // widest regions, deepest and densest wrinkles), at the largest apex a subject can reach
+    // (extremeness 1 × overall scale 1.15).
+    let t = FaceTemplate::default();
+    let cfg = FaceSetConfig::default();
+    let extreme = ExpressionStyle {
+        gains: Actions::uniform(1.7),
+        asymmetry: 0.3,
+        spread: 1.25,
+        corner_shift: [0.04, -0.04],
+        jaw_band: 1.5,
+        jaw_glide: 1.5,
+        wrinkle_depth: 1.5,
+        wrinkle_spacing: 0.85,
+        ..Default::default()
+    };
+    let styles = [cfg.style(0), cfg.style(1), cfg.style(2), extreme];
+    for (i, style) in styles.iter().enumerate() {
+        let n = t.neutral(&FaceIdentity::random(i as u64));
+        for e in Expression::ALL {
+            let a = style.actions_at(&e.actions().scaled(1.15), 1.0);
+            let v = apply_styled_actions(&t, &n, &a, style);
+            let mesh = TriMesh::new(v, t.triangles().to_vec()).unwrap();
+            assert_eq!(self_intersections(&mesh), 0, "{e:?}, style {i}");
+        }
     }
 }
