@@ -68,6 +68,9 @@ fn entry(name: &str, label: &Value) -> Result<FrameEntry> {
     })
 }
 
+/// A frame's number, label and vertices.
+type LabelledFrame = (u64, [f32; 6], Vec<[f32; 3]>);
+
 /// Reads split `split` of the dataset in `dir`.
 pub fn read_face_folder(dir: &Path, split: &str) -> Result<FaceFolder> {
     let data =
@@ -98,7 +101,7 @@ pub fn read_face_folder(dir: &Path, split: &str) -> Result<FaceFolder> {
         subjects.entry(e.subject).or_insert(next);
     }
     let mut neutrals: Vec<Option<Vec<[f32; 3]>>> = vec![None; subjects.len()];
-    let mut frames: BTreeMap<(usize, usize), Vec<(u64, [f32; 6], Vec<[f32; 3]>)>> = BTreeMap::new();
+    let mut frames: BTreeMap<(usize, usize), Vec<LabelledFrame>> = BTreeMap::new();
     for (e, v) in entries.into_iter().zip(vertices) {
         let s = subjects[&e.subject];
         match e.expression {

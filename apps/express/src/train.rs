@@ -145,14 +145,16 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     };
     let run = training::train(&mut task, &training_config, &mut |p| {
         if p.epoch_end {
-            bar.println(format!(
-                "epoch {:>3}: loss {:.4}, train {:.3} mm, held-out {:.3} mm{}",
-                p.epoch + 1,
-                p.loss,
-                p.figure.unwrap_or(f64::NAN),
-                p.validation.unwrap_or(f64::NAN),
-                if p.improved { " (best)" } else { "" }
-            ));
+            bar.suspend(|| {
+                eprintln!(
+                    "epoch {:>3}: loss {:.4}, train {:.3} mm, held-out {:.3} mm{}",
+                    p.epoch + 1,
+                    p.loss,
+                    p.figure.unwrap_or(f64::NAN),
+                    p.validation.unwrap_or(f64::NAN),
+                    if p.improved { " (best)" } else { "" }
+                )
+            });
         } else {
             bar.set_message(format!("{}/{}", p.epoch + 1, p.epochs));
             bar.inc(1);

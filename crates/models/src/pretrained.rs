@@ -7,6 +7,8 @@
 //! |---|---|---|
 //! | `hand_autoencoder` | Handy++, latent 8 (docs/handy.md) | [`crate::LoadedHandModel`], [`crate::handy::spiral::SpiralMorphableModel`] |
 //! | `point_simplifier` | the point simplifier of ch. 5.3 (docs/pcsimplify_model.md) | [`crate::point_simplifier::PointSimplifier`] |
+//! | `expression_generator` | the ch. 4 expression generator, spiral decoder (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
+//! | `expression_blendshape` | its PCA blendshape baseline (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
 
 use std::path::Path;
 
@@ -20,7 +22,7 @@ struct Bundled {
 }
 
 /// Every bundled model, by name.
-const BUNDLED: [Bundled; 2] = [
+const BUNDLED: [Bundled; 4] = [
     Bundled {
         name: "hand_autoencoder",
         bytes: include_bytes!("../weights/hand_autoencoder.safetensors"),
@@ -30,6 +32,16 @@ const BUNDLED: [Bundled; 2] = [
         name: "point_simplifier",
         bytes: include_bytes!("../weights/point_simplifier.safetensors"),
         manifest: include_str!("../weights/point_simplifier.manifest.json"),
+    },
+    Bundled {
+        name: "expression_generator",
+        bytes: include_bytes!("../weights/expression_generator.safetensors"),
+        manifest: include_str!("../weights/expression_generator.manifest.json"),
+    },
+    Bundled {
+        name: "expression_blendshape",
+        bytes: include_bytes!("../weights/expression_blendshape.safetensors"),
+        manifest: include_str!("../weights/expression_blendshape.manifest.json"),
     },
 ];
 
@@ -138,6 +150,32 @@ mod tests {
         let simplifier: crate::point_simplifier::PointSimplifier =
             load("point_simplifier").unwrap();
         assert_eq!(simplifier.config(), &Default::default());
+        for (name, decoder) in [
+            (
+                "expression_generator",
+                crate::expression::DecoderKind::Spiral,
+            ),
+            (
+                "expression_blendshape",
+                crate::expression::DecoderKind::Blendshape,
+            ),
+        ] {
+            let model: crate::expression::ExpressionModel = load(name).unwrap();
+            assert_eq!(model.config().decoder, decoder);
+            assert_eq!(model.template().vertex_count(), 5040);
+            // a smile at the apex moves the face; the neutral label leaves it nearly still
+            let neutral = model.template().vertices().to_vec();
+            let frames = model
+                .generate(&[[0.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]], &neutral)
+                .unwrap();
+            let moved = |f: &[[f32; 3]]| {
+                f.iter()
+                    .zip(&neutral)
+                    .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).sum::<f32>())
+                    .fold(0.0, f32::max)
+            };
+            assert!(moved(&frames[1]) > 2.0 && moved(&frames[0]) < 1.0, "{name}");
+        }
         let err = load::<LoadedHandModel>("nothing").unwrap_err().to_string();
         assert!(err.contains("hand_autoencoder, point_simplifier"), "{err}");
     }
