@@ -81,10 +81,21 @@ fn labels(args: &GenerateArgs) -> Result<Vec<[f32; 6]>> {
     timed_labels(expression_named(&args.expr)?, &timing, args.intensity)
 }
 
-fn is_animation(path: &Path) -> bool {
-    path.extension()
+/// True for a `.glb` output, false for a folder; an error for a single mesh or `.gltf` file.
+fn is_animation(path: &Path) -> Result<bool> {
+    let extension = path
+        .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("glb") => Ok(true),
+        Some(e @ ("gltf" | "ply" | "obj" | "off" | "stl")) => bail!(
+            "{}: a .{e} file cannot hold an animation; write a .glb, or name a folder for one \
+             PLY per frame",
+            path.display()
+        ),
+        _ => Ok(false),
+    }
 }
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
@@ -93,6 +104,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     }
     let guard = OutputGuard::new(args.neutral.iter().chain(&args.curve));
     guard.check(&args.output)?;
+    let animation = is_animation(&args.output)?;
     if let Some(p) = &args.preview {
         guard.check(p)?;
     }
@@ -119,7 +131,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     let frames = model.generate(&labels, &neutral)?;
     let seconds = started.elapsed().as_secs_f64();
     let rest = TriMesh::new(neutral, template.triangles().to_vec())?;
-    let files = if is_animation(&args.output) {
+    let files = if animation {
         write_morph_animation(
             &args.output,
             &MorphAnimation::new(rest.clone(), frames.clone(), args.fps)?,

@@ -277,6 +277,17 @@ fn bad_requests_get_one_line_errors() {
         "40:20",
     ]));
     assert!(err.contains("must increase"), "{err}");
+    let err = fails(&express(&[
+        "generate",
+        "-o",
+        dir.path().join("one.ply").to_str().unwrap(),
+        "--weights",
+        weights,
+    ]));
+    assert!(
+        err.contains("one.ply") && err.contains("write a .glb"),
+        "{err}"
+    );
     assert!(!out.exists());
     // Never overwrite the input.
     let err = fails(&express(&[

@@ -11,8 +11,9 @@
 //!   synthetic face; 28 431 → … → 46 in the thesis).
 //! - `D` ([`DecoderKind::Blendshape`]): the baseline, [`BlendshapeDecoder`] with as many
 //!   blendshapes as latent units.
-//! - The decoder's output is multiplied by `displacement_scale` (mm; the RMS of the training
-//!   displacements), so a freshly initialised network starts at the data's scale.
+//! - The spiral decoder's output is multiplied by `displacement_scale` (mm; `express train`
+//!   sets the RMS of the training displacements), so a freshly initialised network starts at
+//!   the data's scale; the blendshapes are in data units already.
 //!
 //! # Parameter names
 //! `encoder.{weight,bias}_{ih,hh}_l0` (PyTorch's LSTM), `decoder.latent.*`,
@@ -53,7 +54,7 @@ pub struct ExpressionGeneratorConfig {
     pub spiral_lengths: Vec<usize>,
     /// Spiral dilation per level (`channels.len() + 1`). Default 1.
     pub dilations: Vec<usize>,
-    /// Millimetres per unit of decoder output. Default 1.
+    /// Millimetres per unit of spiral decoder output. Default 1.
     pub displacement_scale: f64,
 }
 

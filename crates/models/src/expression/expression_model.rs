@@ -167,7 +167,12 @@ impl ExpressionModel {
         }
         let config = match serde_json::to_value(&self.config) {
             Ok(serde_json::Value::Object(config)) => config,
-            _ => serde_json::Map::new(),
+            other => {
+                return Err(Error::Invalid {
+                    what: "model config".into(),
+                    reason: format!("cannot serialise: {other:?}"),
+                });
+            }
         };
         Ok(Checkpoint {
             header: CheckpointHeader::new(EXPRESSION_MODEL_NAME, config),
