@@ -271,6 +271,28 @@ pub(crate) fn checkpoint_of(path: &Path, error: Error) -> Error {
     }
 }
 
+/// Checks that a model read from `source` to resume training was trained with the requested
+/// config and on a template with the requested faces.
+pub(crate) fn check_resumable<C: PartialEq + std::fmt::Debug>(
+    source: &Path,
+    (config, triangles): (&C, &[[u32; 3]]),
+    (requested, requested_triangles): (&C, &[[u32; 3]]),
+) -> Result<()> {
+    if config != requested {
+        return Err(checkpoint_error(
+            source,
+            format!("was trained with {config:?}, not the requested {requested:?}"),
+        ));
+    }
+    if triangles != requested_triangles {
+        return Err(checkpoint_error(
+            source,
+            "its template has different faces".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// The variables of `vars`, locked.
 pub(crate) fn lock(
     vars: &candle_nn::VarMap,

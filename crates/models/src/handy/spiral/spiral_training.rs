@@ -162,17 +162,11 @@ impl Trainable for SpiralTraining {
     /// faces.
     fn restore(&mut self, checkpoint: &Checkpoint, source: &Path) -> Result<()> {
         let model = SpiralMorphableModel::from_checkpoint(checkpoint, source, &self.device)?;
-        let bad = |reason: String| crate::checkpoint::checkpoint_error(source, reason);
-        if model.config() != self.model.config() {
-            return Err(bad(format!(
-                "was trained with {:?}, not the requested {:?}",
-                model.config(),
-                self.model.config()
-            )));
-        }
-        if model.template().triangles() != self.template.triangles() {
-            return Err(bad("its template has different faces".into()));
-        }
+        crate::checkpoint::check_resumable(
+            source,
+            (model.config(), model.template().triangles()),
+            (self.model.config(), self.template.triangles()),
+        )?;
         self.model = model;
         self.normalize_data()
     }
