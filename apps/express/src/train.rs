@@ -1,5 +1,5 @@
 //! `express train`: trains the expression generator (or, with `--decoder blendshape`, its
-//! baseline) on a 4D face dataset's `train` split (eq. 4.2, Adam, lr 1e-3 × 0.99 per epoch),
+//! baseline; with `--decoder residual`, blendshapes plus a spiral decoder of the remainder) on a 4D face dataset's `train` split (eq. 4.2, Adam, lr 1e-3 × 0.99 per epoch),
 //! choosing the epoch by the per-vertex error on the last `--validation-subjects` training
 //! subjects (subject-disjoint; the `test` split is never read).
 
@@ -10,7 +10,9 @@ use candle_core::Device;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_geometry::{OutputGuard, check_count};
-use meshgnn_models::expression::{DecoderKind, ExpressionGeneratorConfig, ExpressionTraining};
+use meshgnn_models::expression::{
+    DecoderKind, ExpressionGeneratorConfig, ExpressionModel, ExpressionTraining,
+};
 use meshgnn_models::training::{self, TrainingConfig};
 use meshgnn_models::{MAX_BATCH_SIZE, MAX_EPOCHS};
 use serde_json::json;
@@ -24,6 +26,9 @@ pub enum Decoder {
     Spiral,
     /// PCA blendshapes of the training displacements (the baseline).
     Blendshape,
+    /// Blendshapes plus a spiral decoder of their remainder (start it from a trained
+    /// baseline with `--init`).
+    Residual,
 }
 
 /// Arguments of `express train`.
@@ -37,6 +42,10 @@ pub struct TrainArgs {
     /// The decoder.
     #[arg(long, value_enum, default_value_t = Decoder::Spiral)]
     pub decoder: Decoder,
+    /// Start from this model's parameters wherever names and shapes match (and its
+    /// blendshapes): `--decoder residual --init BASELINE.safetensors` starts as the baseline.
+    #[arg(long, value_name = "MODEL")]
+    pub init: Option<PathBuf>,
     /// Passes over the training sequences.
     #[arg(long, default_value_t = 100)]
     pub epochs: usize,
@@ -71,7 +80,7 @@ fn checkpoint_path(output: &std::path::Path) -> PathBuf {
 }
 
 pub fn run(args: &TrainArgs) -> Result<()> {
-    let guard = OutputGuard::new([&args.data]);
+    let guard = OutputGuard::new(std::iter::once(&args.data).chain(&args.init));
     guard.check(&args.output)?;
     guard.check(&checkpoint_path(&args.output))?;
     check_count(
@@ -105,6 +114,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         decoder: match args.decoder {
             Decoder::Spiral => DecoderKind::Spiral,
             Decoder::Blendshape => DecoderKind::Blendshape,
+            Decoder::Residual => DecoderKind::Residual,
         },
         displacement_scale: train.displacement_rms().max(1e-6),
         ..Default::default()
@@ -118,14 +128,29 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         train.neutrals.len(),
         validation.neutrals.len()
     );
-    let mut task = ExpressionTraining::new(
-        &folder.template,
-        &config,
-        &train,
-        &validation,
-        args.seed,
-        &Device::Cpu,
-    )?;
+    let mut task = match &args.init {
+        Some(path) => {
+            let init = ExpressionModel::load(path, &Device::Cpu)?;
+            let (task, taken) = ExpressionTraining::starting_from(
+                &init,
+                path,
+                &config,
+                &train,
+                &validation,
+                args.seed,
+            )?;
+            eprintln!("{taken} parameter tensors start from {}", path.display());
+            task
+        }
+        None => ExpressionTraining::new(
+            &folder.template,
+            &config,
+            &train,
+            &validation,
+            args.seed,
+            &Device::Cpu,
+        )?,
+    };
     let steps = train.sequences.len().div_ceil(args.batch_size);
     let bar = ProgressBar::new((args.epochs * steps) as u64);
     if let Ok(style) =

@@ -1,5 +1,5 @@
 //! `pcsimplify simplify IN -o OUT (--ratio R | --points N) [--method M] [--seed S]
-//! [--triangulate] [--verbose] [--json]`: keep exactly the requested number of points of a
+//! [--triangulate] [--preview PNG] [--verbose] [--json]`: keep exactly the requested number of points of a
 //! cloud or mesh (thesis ch. 5.3 and its ch. 5.5 baselines) and write them, or with
 //! `--triangulate` a mesh re-built over them (ch. 5.5.3 mesh route).
 
@@ -7,9 +7,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use meshgnn_data::{ColoredPoints, View, point_cloud_sheet, value_colors, write_png};
 use meshgnn_geometry::{
-    MeshFormat, OutputGuard, PointCloud, TangentChartOptions, TriMesh, mesh_report,
-    tangent_chart_triangulation, write_mesh, write_point_cloud,
+    MeshFormat, OutputGuard, PointCloud, TangentChartOptions, TriMesh, curvature_features,
+    mesh_report, tangent_chart_triangulation, write_mesh, write_point_cloud,
 };
 use serde_json::{Value, json};
 
@@ -49,6 +50,10 @@ pub struct SimplifyArgs {
     /// a mesh.
     #[arg(long)]
     pub triangulate: bool,
+    /// Write a PNG: the input and the kept points side by side, coloured by the input's
+    /// curvature (eq. 5.3's K̄, blue flat → yellow curved).
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
     /// Print where the time went.
     #[arg(short, long)]
     pub verbose: bool,
@@ -60,7 +65,11 @@ pub struct SimplifyArgs {
 /// Reads, selects, writes, reports.
 pub fn run(args: &SimplifyArgs) -> Result<()> {
     let inputs = std::iter::once(&args.input).chain(&args.weights);
-    OutputGuard::new(inputs).check(&args.output)?;
+    let guard = OutputGuard::new(inputs);
+    guard.check(&args.output)?;
+    if let Some(p) = &args.preview {
+        guard.check(p)?;
+    }
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
     let start = Instant::now();
@@ -108,6 +117,11 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         write_point_cloud(&args.output, &kept)
             .with_context(|| format!("writing {}", args.output.display()))?;
     }
+    if let Some(p) = &args.preview {
+        write_preview(p, &input, &selection, &kept)
+            .with_context(|| format!("writing the preview {}", p.display()))?;
+        report["preview"] = json!(p.display().to_string());
+    }
     if args.json {
         println!("{report}");
     } else {
@@ -154,6 +168,49 @@ fn triangulate(selection: &Selection, kept: &PointCloud) -> Result<TriMesh> {
     .context("triangulating the kept points")?;
     Ok(r.mesh)
 }
+
+/// Neighbours of the preview's curvature (eq. 5.1-5.3), as in the simplifier's features.
+const PREVIEW_NEIGHBOURS: usize = 16;
+
+/// The `--preview` sheet: input and kept points in one framing, each kept point in the
+/// colour of the input point it came from.
+fn write_preview(
+    path: &std::path::Path,
+    input: &Input,
+    selection: &Selection,
+    kept: &PointCloud,
+) -> Result<()> {
+    let n = input.points.len();
+    let colors = match n {
+        0..=2 => vec![[0.6; 3]; n],
+        _ => value_colors(
+            &curvature_features(&input.points, PREVIEW_NEIGHBOURS.min(n - 1))?.mean_curvature,
+        ),
+    };
+    let kept_colors: Vec<[f64; 3]> = selection
+        .indices
+        .iter()
+        .map(|&i| colors.get(i as usize).copied().unwrap_or([0.6; 3]))
+        .collect();
+    let sheet = point_cloud_sheet(
+        &[
+            ColoredPoints {
+                points: &input.points,
+                colors: &colors,
+            },
+            ColoredPoints {
+                points: kept.points(),
+                colors: &kept_colors,
+            },
+        ],
+        PREVIEW_TILE,
+        View::default(),
+    )?;
+    Ok(write_png(path, &sheet)?)
+}
+
+/// Pixels per side of each preview tile.
+const PREVIEW_TILE: u32 = 640;
 
 fn timings_json(selection: &Selection) -> Value {
     Value::Object(

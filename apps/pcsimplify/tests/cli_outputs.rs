@@ -170,3 +170,73 @@ fn an_interrupted_write_leaves_no_temporary_and_no_output() {
         assert!(!output.exists(), "{signal}: a partial output was left");
     }
 }
+
+#[test]
+fn preview_shows_input_and_kept_points_coloured_by_curvature() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("cube.ply");
+    // flat faces (low curvature, blue) meeting at edges (high curvature, yellow)
+    let cube = meshgnn_geometry::subdivided_cube(12);
+    write_point_cloud(&input, &PointCloud::new(cube.vertices().to_vec()).unwrap()).unwrap();
+    let (output, preview) = (dir.path().join("kept.ply"), dir.path().join("p.png"));
+    let out = pcsimplify(&[
+        "simplify",
+        text(&input),
+        "-o",
+        text(&output),
+        "--ratio",
+        "0.1",
+        "--method",
+        "fps",
+        "--preview",
+        text(&preview),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["preview"], text(&preview));
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&preview).unwrap(),
+    ));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!((info.width, info.height), (1280, 640));
+    let tile = |x0: usize| {
+        let (mut blue, mut yellow, mut painted) = (0, 0, 0);
+        for y in 0..640 {
+            for x in x0..x0 + 640 {
+                let i = (y * 1280 + x) * 3;
+                let [r, g, b] = [pixels[i], pixels[i + 1], pixels[i + 2]].map(i32::from);
+                if [r, g, b] != [250; 3] {
+                    painted += 1;
+                    blue += usize::from(b > g + 30);
+                    yellow += usize::from(r > 120 && g > 120 && b < 80);
+                }
+            }
+        }
+        (blue, yellow, painted)
+    };
+    let (left, right) = (tile(0), tile(640));
+    assert!(left.0 > 1000 && left.1 > 100, "input tile {left:?}");
+    assert!(
+        right.2 > 0 && right.2 < left.2,
+        "kept {right:?}, input {left:?}"
+    );
+    // the preview is an output like any other: never onto the input
+    let out = pcsimplify(&[
+        "simplify",
+        text(&input),
+        "-o",
+        text(&output),
+        "--ratio",
+        "0.1",
+        "--preview",
+        text(&input),
+    ]);
+    assert_refused(&out, text(&input), text(&input));
+}

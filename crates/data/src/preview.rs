@@ -47,7 +47,65 @@ impl Default for View {
     }
 }
 
-const BACKGROUND: [u8; 3] = [250, 250, 250];
+pub(crate) const BACKGROUND: [u8; 3] = [250, 250, 250];
+
+/// Refuses tiles outside `8..=8192` pixels.
+pub(crate) fn check_tile_size(size: u32) -> Result<()> {
+    if (8..=8192).contains(&size) {
+        Ok(())
+    } else {
+        Err(invalid(
+            "size",
+            size,
+            "tile size must be in 8..=8192 pixels",
+        ))
+    }
+}
+
+/// The orthographic projection of a tile: `view`'s rotation, then the rotated points' 2D
+/// bounding box fitted into `size` pixels with a 6 % margin, `y` up.
+pub(crate) struct Projection {
+    pub(crate) rotation: M3,
+    centre: [f64; 2],
+    pixels_per_unit: f64,
+    size: f64,
+}
+
+impl Projection {
+    /// The projection of `view` that fits `points` into a `size`-pixel tile.
+    pub(crate) fn fitted(points: &[[f32; 3]], size: u32, view: View) -> Self {
+        let rotation: M3 = mul_m(
+            &axis_angle([1.0, 0.0, 0.0], view.pitch.to_radians()),
+            &axis_angle([0.0, 1.0, 0.0], view.yaw.to_radians()),
+        );
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for &p in points {
+            let q = mul_v(&rotation, to_f64(p));
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12);
+        let size = f64::from(size);
+        Self {
+            rotation,
+            centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])],
+            pixels_per_unit: 0.88 * size / extent,
+            size,
+        }
+    }
+
+    /// Pixel `x`, `y` (top row 0) and depth (larger is nearer) of `p`.
+    pub(crate) fn to_screen(&self, p: [f32; 3]) -> V3 {
+        let q = mul_v(&self.rotation, to_f64(p));
+        [
+            0.5 * self.size + (q[0] - self.centre[0]) * self.pixels_per_unit,
+            0.5 * self.size - (q[1] - self.centre[1]) * self.pixels_per_unit,
+            q[2],
+        ]
+    }
+}
 
 /// Renders `mesh` into a `size × size` tile: orthographic, fitted with a 6 % margin,
 /// two-sided Lambert shading of interpolated vertex normals under a light from the viewer's
@@ -65,49 +123,19 @@ const BACKGROUND: [u8; 3] = [250, 250, 250];
 /// # Ok::<(), meshgnn_data::Error>(())
 /// ```
 pub fn render_mesh(mesh: &TriMesh, size: u32, view: View, color: [f64; 3]) -> Result<RgbImage> {
-    if !(8..=8192).contains(&size) {
-        return Err(invalid(
-            "size",
-            size,
-            "tile size must be in 8..=8192 pixels",
-        ));
-    }
+    check_tile_size(size)?;
     if mesh.vertex_count() == 0 || mesh.face_count() == 0 {
         return Err(invalid("mesh", "empty", "nothing to render"));
     }
-    let rot: M3 = mul_m(
-        &axis_angle([1.0, 0.0, 0.0], view.pitch.to_radians()),
-        &axis_angle([0.0, 1.0, 0.0], view.yaw.to_radians()),
-    );
-    let cam: Vec<V3> = mesh
+    let projection = Projection::fitted(mesh.vertices(), size, view);
+    let screen: Vec<V3> = mesh
         .vertices()
         .par_iter()
-        .map(|&p| mul_v(&rot, to_f64(p)))
+        .map(|&p| projection.to_screen(p))
         .collect();
     let normals: Vec<V3> = vertex_normals(mesh)
         .into_par_iter()
-        .map(|n| mul_v(&rot, to_f64(n)))
-        .collect();
-    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-    for p in &cam {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12);
-    let s = f64::from(size);
-    let px_scale = 0.88 * s / extent;
-    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-    let screen: Vec<V3> = cam
-        .iter()
-        .map(|p| {
-            [
-                0.5 * s + (p[0] - centre[0]) * px_scale,
-                0.5 * s - (p[1] - centre[1]) * px_scale,
-                p[2],
-            ]
-        })
+        .map(|n| mul_v(&projection.rotation, to_f64(n)))
         .collect();
     let n = size as usize;
     let mut depth = vec![f64::NEG_INFINITY; n * n];
@@ -209,6 +237,13 @@ pub fn contact_sheet(meshes: &[TriMesh], columns: u32, tile: u32, view: View) ->
         .enumerate()
         .map(|(i, m)| render_mesh(m, tile, view, tints[i % tints.len()]))
         .collect::<Result<Vec<_>>>()?;
+    Ok(tile_images(&tiles, columns, tile))
+}
+
+/// `tiles` of `tile × tile` pixels laid out `columns` per row, in order.
+pub(crate) fn tile_images(tiles: &[RgbImage], columns: u32, tile: u32) -> RgbImage {
+    let columns = columns.max(1);
+    let rows = (tiles.len() as u32).div_ceil(columns);
     let (w, h) = ((columns * tile) as usize, (rows * tile) as usize);
     let mut pixels = vec![BACKGROUND[0]; w * h * 3];
     let t = tile as usize;
@@ -225,11 +260,11 @@ pub fn contact_sheet(meshes: &[TriMesh], columns: u32, tile: u32, view: View) ->
             }
         }
     }
-    Ok(RgbImage {
+    RgbImage {
         width: w as u32,
         height: h as u32,
         pixels,
-    })
+    }
 }
 
 /// Encodes `image` as PNG bytes.

@@ -11,13 +11,19 @@
 //!   synthetic face; 28 431 → … → 46 in the thesis).
 //! - `D` ([`DecoderKind::Blendshape`]): the baseline, [`BlendshapeDecoder`] with as many
 //!   blendshapes as latent units.
+//! - `D` ([`DecoderKind::Residual`], beyond the thesis): the blendshape decoder plus a spiral
+//!   decoder of what the blendshapes miss, `D(z) = B(z) + S(z)`. Its spiral output layer
+//!   starts at zero, so a fresh model is exactly its blendshape part and can start from a
+//!   trained baseline (`ExpressionModel::initialize_from`); the spiral half then only has to
+//!   learn the non-linear remainder (docs/expression_model.md).
 //! - The spiral decoder's output is multiplied by `displacement_scale` (mm; `express train`
 //!   sets the RMS of the training displacements), so a freshly initialised network starts at
 //!   the data's scale; the blendshapes are in data units already.
 //!
 //! # Parameter names
-//! `encoder.{weight,bias}_{ih,hh}_l0` (PyTorch's LSTM), `decoder.latent.*`,
-//! `decoder.conv{i}.*` (spiral) or `decoder.coefficients.*` (blendshape).
+//! `encoder.{weight,bias}_{ih,hh}_l0` (PyTorch's LSTM), then `decoder.latent.*`,
+//! `decoder.conv{i}.*` (spiral), `decoder.coefficients.*` (blendshape) or
+//! `decoder.coefficients.*` and `decoder.residual.{latent,conv{i}}.*` (residual).
 
 use candle_core::Tensor;
 use candle_nn::VarBuilder;
@@ -36,7 +42,19 @@ pub enum DecoderKind {
     Spiral,
     /// PCA blendshapes of the training displacements (the thesis' baseline).
     Blendshape,
+    /// Blendshapes plus a spiral decoder of their remainder.
+    Residual,
 }
+
+impl DecoderKind {
+    /// Whether the decoder has blendshapes (fitted on the training displacements).
+    pub fn uses_blendshapes(self) -> bool {
+        matches!(self, Self::Blendshape | Self::Residual)
+    }
+}
+
+/// Prefix of the residual decoder's spiral half.
+pub const RESIDUAL_PREFIX: &str = "decoder.residual";
 
 /// Hyper-parameters of an [`ExpressionGenerator`]; defaults are Table 4.1.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,6 +129,7 @@ impl ExpressionGeneratorConfig {
 enum Decoder {
     Spiral(SpiralDecoder),
     Blendshape(BlendshapeDecoder),
+    Residual(BlendshapeDecoder, SpiralDecoder),
 }
 
 /// Eq. 4.1: label signals `(B, T, 6)` and neutral faces `(B, V, 3)` → frames `(B, T, V, 3)`.
@@ -124,7 +143,7 @@ pub struct ExpressionGenerator {
 
 impl ExpressionGenerator {
     /// The network of `config` on `template` (built with `config.hierarchy_options()`);
-    /// `blendshapes` are required by (and only used by) the blendshape decoder.
+    /// `blendshapes` are required by (and only used by) the blendshape and residual decoders.
     ///
     /// ```
     /// use candle_core::{DType, Device, Tensor};
@@ -149,34 +168,40 @@ impl ExpressionGenerator {
     ) -> Result<Self> {
         config.validate()?;
         let vertices = template.template().vertex_count();
-        let decoder = match (config.decoder, blendshapes) {
-            (DecoderKind::Spiral, _) => Decoder::Spiral(SpiralDecoder::new(
-                vb.pp("decoder"),
+        let spiral = |vb: VarBuilder| {
+            SpiralDecoder::new(
+                vb,
                 template,
                 &config.channels,
                 config.hidden_size,
                 Activation::Relu,
                 SpiralPadding::Repeat,
-            )?),
-            (DecoderKind::Blendshape, Some(b)) if b.vertex_count() == vertices => {
-                Decoder::Blendshape(BlendshapeDecoder::new(
-                    vb.pp("decoder"),
-                    config.hidden_size,
-                    b.to_device(template.device())?,
-                )?)
-            }
-            (DecoderKind::Blendshape, b) => {
-                return Err(Error::Invalid {
+            )
+        };
+        let blendshape = |vb: VarBuilder| -> Result<BlendshapeDecoder> {
+            match blendshapes {
+                Some(b) if b.vertex_count() == vertices => {
+                    BlendshapeDecoder::new(vb, config.hidden_size, b.to_device(template.device())?)
+                }
+                _ => Err(Error::Invalid {
                     what: "blendshape decoder".into(),
-                    reason: match b {
+                    reason: match blendshapes {
                         Some(b) => format!(
                             "blendshapes of {} vertices for a template of {vertices}",
                             b.vertex_count()
                         ),
                         None => "needs the blendshapes".into(),
                     },
-                });
+                }),
             }
+        };
+        let decoder = match config.decoder {
+            DecoderKind::Spiral => Decoder::Spiral(spiral(vb.pp("decoder"))?),
+            DecoderKind::Blendshape => Decoder::Blendshape(blendshape(vb.pp("decoder"))?),
+            DecoderKind::Residual => Decoder::Residual(
+                blendshape(vb.pp("decoder"))?,
+                spiral(vb.pp(RESIDUAL_PREFIX))?,
+            ),
         };
         Ok(Self {
             encoder: LabelEncoder::new(vb.pp("encoder"), config.hidden_size)?,
@@ -199,6 +224,9 @@ impl ExpressionGenerator {
         let d = match &self.decoder {
             Decoder::Spiral(decoder) => (decoder.forward(&flat)? * self.scale)?,
             Decoder::Blendshape(decoder) => decoder.forward(&flat)?,
+            Decoder::Residual(blendshapes, spiral) => {
+                (blendshapes.forward(&flat)? + (spiral.forward(&flat)? * self.scale)?)?
+            }
         };
         Ok(d.reshape((b, t, self.vertices, 3))?)
     }

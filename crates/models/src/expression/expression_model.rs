@@ -5,7 +5,8 @@
 //! # File format: a [`crate::Checkpoint`] of model [`EXPRESSION_MODEL_NAME`]
 //! - Tensors: the network parameters (names in [`super::ExpressionGenerator`]'s docs), the
 //!   template under `template.` (table in [`crate::spiral::TemplateTensors`]'s docs) and, for
-//!   the blendshape baseline, `blendshapes.mean (1, 3V)` and `blendshapes.basis (K, 3V)`.
+//!   the blendshape and residual decoders, `blendshapes.mean (1, 3V)` and
+//!   `blendshapes.basis (K, 3V)`.
 //! - Header: `config` = the [`ExpressionGeneratorConfig`].
 
 use std::collections::HashMap;
@@ -16,8 +17,10 @@ use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 
 use crate::checkpoint::{checkpoint_of, lock, read_file, set_vars};
-use crate::expression::{Blendshapes, ExpressionGenerator, ExpressionGeneratorConfig};
-use crate::spiral::{TemplateTensors, seeded_initialization};
+use crate::expression::{
+    Blendshapes, DecoderKind, ExpressionGenerator, ExpressionGeneratorConfig, RESIDUAL_PREFIX,
+};
+use crate::spiral::{SpiralDecoder, TemplateTensors, seeded_initialization};
 use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
 
 /// The model's name in checkpoints.
@@ -47,7 +50,7 @@ impl std::fmt::Debug for ExpressionModel {
 
 impl ExpressionModel {
     /// A freshly initialised model (weights from `seed`) on `template`; `blendshapes` for the
-    /// blendshape decoder.
+    /// blendshape and residual decoders (the residual's spiral output layer starts at zero).
     ///
     /// ```
     /// use candle_core::Device;
@@ -71,7 +74,39 @@ impl ExpressionModel {
         let tensors = TemplateTensors::new(template, &config.hierarchy_options(), device)?;
         let model = Self::assemble(tensors, config, blendshapes)?;
         seeded_initialization(&model.vars, seed)?;
+        if config.decoder == DecoderKind::Residual {
+            let output = format!("{RESIDUAL_PREFIX}.{}.", SpiralDecoder::OUTPUT_LAYER);
+            for (name, var) in lock(&model.vars)?.iter() {
+                if name.starts_with(&output) {
+                    var.set(&var.zeros_like()?)?;
+                }
+            }
+        }
         Ok(model)
+    }
+
+    /// Sets every parameter that `source` has under the same name and shape to its value
+    /// (the LSTM and blendshape weights of a trained baseline, say); returns how many were
+    /// set. The two models must share the template's faces.
+    pub fn initialize_from(&self, source: &ExpressionModel, path: &Path) -> Result<usize> {
+        if source.template().triangles() != self.template().triangles() {
+            return Err(checkpoint_of(
+                path,
+                Error::Invalid {
+                    what: "template".into(),
+                    reason: "its faces differ from the training data's template".into(),
+                },
+            ));
+        }
+        let theirs = lock(&source.vars)?;
+        let mut set = 0;
+        for (name, var) in lock(&self.vars)?.iter() {
+            if let Some(value) = theirs.get(name).filter(|v| v.dims() == var.dims()) {
+                var.set(&value.as_tensor().to_device(self.device())?)?;
+                set += 1;
+            }
+        }
+        Ok(set)
     }
 
     fn assemble(
@@ -120,7 +155,7 @@ impl ExpressionModel {
         &self.vars
     }
 
-    /// The blendshapes of a baseline model.
+    /// The blendshapes of a blendshape or residual model.
     pub fn blendshapes(&self) -> Option<&Blendshapes> {
         self.blendshapes.as_ref()
     }
@@ -222,12 +257,12 @@ impl ExpressionModel {
             })
         };
         let template = TemplateTensors::from_named_tensors(&tensors, TEMPLATE_PREFIX, device)?;
-        let blendshapes = match config.decoder {
-            super::DecoderKind::Blendshape => Some(Blendshapes::from_tensors(
+        let blendshapes = match config.decoder.uses_blendshapes() {
+            true => Some(Blendshapes::from_tensors(
                 get(BLENDSHAPE_MEAN)?,
                 get(BLENDSHAPE_BASIS)?,
             )?),
-            super::DecoderKind::Spiral => None,
+            false => None,
         };
         let model = Self::assemble(template, &config, blendshapes)?;
         set_vars(&model.vars, &tensors)?;

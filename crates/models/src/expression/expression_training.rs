@@ -12,7 +12,7 @@ use meshgnn_losses::losses::{reconstruction_l1, temporal_coherence};
 
 use crate::adam::sorted_vars;
 use crate::expression::{
-    Blendshapes, DecoderKind, EXPRESSION_MODEL_NAME, ExpressionGeneratorConfig, ExpressionModel,
+    Blendshapes, EXPRESSION_MODEL_NAME, ExpressionGeneratorConfig, ExpressionModel,
     ExpressionSequences,
 };
 use crate::training::{BatchLoss, StepContext, Trainable};
@@ -67,6 +67,17 @@ pub(crate) fn mean_vertex_distance(a: &Tensor, b: &Tensor) -> Result<f64> {
     Ok(f64::from(d.mean_all()?.to_scalar::<f32>()?))
 }
 
+/// Refuses sequences that are not finite, labelled in range and on `template`'s vertices.
+fn check_sequences(
+    template: &TriMesh,
+    train: &ExpressionSequences,
+    validation: &ExpressionSequences,
+) -> Result<()> {
+    let v = template.vertex_count();
+    train.check("training sequences", v)?;
+    validation.check("validation sequences", v)
+}
+
 /// An expression model with its training and validation sequences.
 pub struct ExpressionTraining {
     model: ExpressionModel,
@@ -108,23 +119,60 @@ impl ExpressionTraining {
         seed: u64,
         device: &Device,
     ) -> Result<Self> {
-        let v = template.vertex_count();
-        train.check("training sequences", v)?;
-        validation.check("validation sequences", v)?;
-        let blendshapes = match config.decoder {
-            DecoderKind::Blendshape => Some(Blendshapes::fit(
+        check_sequences(template, train, validation)?;
+        let blendshapes = match config.decoder.uses_blendshapes() {
+            true => Some(Blendshapes::fit(
                 template,
                 &train.displacements(),
                 config.hidden_size,
             )?),
-            DecoderKind::Spiral => None,
+            false => None,
         };
+        let model = ExpressionModel::new(template, config, blendshapes, seed, device)?;
+        Self::with_model(model, train, validation)
+    }
+
+    /// Like [`Self::new`], but every parameter `init` (read from `path`) has under the same
+    /// name and shape starts at its value, and a decoder with blendshapes takes `init`'s
+    /// when it has them: the residual decoder then starts as the trained baseline `init`.
+    /// Also returns how many parameters were taken.
+    pub fn starting_from(
+        init: &ExpressionModel,
+        path: &Path,
+        config: &ExpressionGeneratorConfig,
+        train: &ExpressionSequences,
+        validation: &ExpressionSequences,
+        seed: u64,
+    ) -> Result<(Self, usize)> {
+        let template = init.template();
+        check_sequences(template, train, validation)?;
+        let blendshapes = match (config.decoder.uses_blendshapes(), init.blendshapes()) {
+            (false, _) => None,
+            (true, Some(b)) => Some(b.clone()),
+            (true, None) => Some(Blendshapes::fit(
+                template,
+                &train.displacements(),
+                config.hidden_size,
+            )?),
+        };
+        let model = ExpressionModel::new(template, config, blendshapes, seed, init.device())?;
+        let taken = model.initialize_from(init, path)?;
+        Ok((Self::with_model(model, train, validation)?, taken))
+    }
+
+    /// Training of `model` as it stands.
+    fn with_model(
+        model: ExpressionModel,
+        train: &ExpressionSequences,
+        validation: &ExpressionSequences,
+    ) -> Result<Self> {
+        let device = model.device().clone();
         Ok(Self {
-            model: ExpressionModel::new(template, config, blendshapes, seed, device)?,
-            template: template.clone(),
-            train: sequence_tensors(train, device)?,
-            validation: sequence_tensors(validation, device)?,
-            device: device.clone(),
+            template: model.template().clone(),
+            train: sequence_tensors(train, &device)?,
+            validation: sequence_tensors(validation, &device)?,
+            model,
+            device,
         })
     }
 
@@ -213,7 +261,7 @@ impl Trainable for ExpressionTraining {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::expression::{ExpressionSequence, evaluate_expressions};
+    use crate::expression::{DecoderKind, ExpressionSequence, evaluate_expressions};
     use crate::training::{TrainingConfig, train};
 
     /// Two subjects (the second 10% wider) opening a "jaw" (a rotation of the lower half about
@@ -263,10 +311,14 @@ mod tests {
     }
 
     #[test]
-    fn a_few_steps_lower_the_loss_for_both_decoders_and_resume_bit_exactly() {
+    fn a_few_steps_lower_the_loss_for_every_decoder_and_resume_bit_exactly() {
         let sphere = meshgnn_geometry::icosphere(2);
         let data = jaw_sequences(&sphere);
-        for decoder in [DecoderKind::Spiral, DecoderKind::Blendshape] {
+        for decoder in [
+            DecoderKind::Spiral,
+            DecoderKind::Blendshape,
+            DecoderKind::Residual,
+        ] {
             let config = tiny(decoder, &data);
             let mut task =
                 ExpressionTraining::new(&sphere, &config, &data, &data, 3, &Device::Cpu).unwrap();
@@ -300,11 +352,76 @@ mod tests {
                 back.generate(labels, &data.neutrals[1]).unwrap(),
                 task.model().generate(labels, &data.neutrals[1]).unwrap()
             );
-            assert_eq!(
-                back.blendshapes().is_some(),
-                decoder == DecoderKind::Blendshape
-            );
+            assert_eq!(back.blendshapes().is_some(), decoder.uses_blendshapes());
         }
+    }
+
+    #[test]
+    fn a_residual_model_started_from_a_baseline_is_that_baseline_until_trained() {
+        let sphere = meshgnn_geometry::icosphere(2);
+        let data = jaw_sequences(&sphere);
+        let mut baseline = ExpressionTraining::new(
+            &sphere,
+            &tiny(DecoderKind::Blendshape, &data),
+            &data,
+            &data,
+            1,
+            &Device::Cpu,
+        )
+        .unwrap();
+        let config = TrainingConfig {
+            epochs: 20,
+            batch_size: 1,
+            learning_rate: 3e-3,
+            ..Default::default()
+        };
+        train(&mut baseline, &config, &mut |_| {}).unwrap();
+        let path = Path::new("baseline.safetensors");
+        let (mut residual, taken) = ExpressionTraining::starting_from(
+            baseline.model(),
+            path,
+            &tiny(DecoderKind::Residual, &data),
+            &data,
+            &data,
+            2,
+        )
+        .unwrap();
+        // the LSTM's four tensors and the blendshape weights and bias
+        assert_eq!(taken, 6);
+        let (labels, neutral) = (&data.sequences[1].labels, &data.neutrals[1]);
+        let expected = baseline.model().generate(labels, neutral).unwrap();
+        assert_eq!(
+            residual.model().generate(labels, neutral).unwrap(),
+            expected
+        );
+        let before = evaluate_expressions(residual.model(), &data)
+            .unwrap()
+            .total_mm;
+        train(&mut residual, &config, &mut |_| {}).unwrap();
+        let after = evaluate_expressions(residual.model(), &data)
+            .unwrap()
+            .total_mm;
+        assert!(after < before, "{before} mm -> {after} mm");
+        // another template is refused, naming the file
+        let flipped = sphere
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| [a, c, b])
+            .collect();
+        let other = TriMesh::new(sphere.vertices().to_vec(), flipped).unwrap();
+        let model = ExpressionModel::new(
+            &other,
+            &tiny(DecoderKind::Spiral, &data),
+            None,
+            0,
+            &Device::Cpu,
+        )
+        .unwrap();
+        let error = residual.model().initialize_from(&model, path).unwrap_err();
+        assert!(
+            error.to_string().contains("baseline.safetensors"),
+            "{error}"
+        );
     }
 
     #[test]

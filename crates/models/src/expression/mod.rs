@@ -13,7 +13,9 @@ mod label_encoder;
 
 pub use blendshape_decoder::{BlendshapeDecoder, Blendshapes, MAX_BLENDSHAPE_FRAMES};
 pub use expression_evaluation::{ExpressionEvaluation, evaluate_expressions};
-pub use expression_generator::{DecoderKind, ExpressionGenerator, ExpressionGeneratorConfig};
+pub use expression_generator::{
+    DecoderKind, ExpressionGenerator, ExpressionGeneratorConfig, RESIDUAL_PREFIX,
+};
 pub use expression_model::{EXPRESSION_MODEL_NAME, ExpressionModel};
 pub use expression_sequences::{ExpressionSequence, ExpressionSequences};
 pub use expression_training::{ExpressionTraining, expression_loss};

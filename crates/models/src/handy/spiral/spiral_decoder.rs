@@ -70,6 +70,9 @@ pub struct SpiralDecoder {
 }
 
 impl SpiralDecoder {
+    /// Name of the output convolution (level 0, 3 channels) under the decoder's `vb`.
+    pub const OUTPUT_LAYER: &str = "conv0";
+
     /// A decoder from `latent_size` codes through `channels` (one per pooling level of
     /// `template`, finest first) with parameters from `vb` (names in the module docs).
     ///
