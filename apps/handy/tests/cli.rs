@@ -307,39 +307,56 @@ fn topology_mismatch_is_refused_naming_the_file() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("sphere.obj"), "{err}");
-    // a dataset whose template differs from the model's: the first file is named
+    // a dataset whose meshes differ from the model's template: the first file is named
     let coarse = dir.path().join("coarse");
     write_hands(&coarse, 6);
-    let m = read_mesh(coarse.join("template.ply")).unwrap();
+    let template = coarse.join("template.ply");
+    let m = read_mesh(&template).unwrap();
     let moved = TriMesh::new(
         m.vertices().to_vec(),
         m.triangles().iter().map(|t| [t[1], t[2], t[0]]).collect(),
     )
     .unwrap();
-    // rotate the index order of every face in every file and the template: same shape,
-    // different triangles than the model's template
+    // rotate the index order of every face in every file: same shape, different triangles
+    // than the model's template
     for entry in std::fs::read_dir(&coarse).unwrap() {
         let p = entry.unwrap().path();
-        if p.extension().is_some_and(|e| e == "ply") {
+        if p.extension().is_some_and(|e| e == "ply") && p != template {
             let mesh = read_mesh(&p).unwrap();
             let tri = moved.triangles().to_vec();
             write_mesh(&p, &TriMesh::new(mesh.vertices().to_vec(), tri).unwrap()).unwrap();
         }
     }
-    let out = handy(&[
-        "eval",
-        coarse.to_str().unwrap(),
-        "--model",
-        f.model.to_str().unwrap(),
-        "--fit-scans",
-        "0",
-    ]);
+    let eval = || {
+        handy(&[
+            "eval",
+            coarse.to_str().unwrap(),
+            "--model",
+            f.model.to_str().unwrap(),
+            "--fit-scans",
+            "0",
+        ])
+    };
+    let out = eval();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     let manifest: Value =
         serde_json::from_slice(&std::fs::read(coarse.join("dataset.json")).unwrap()).unwrap();
     let first = manifest["splits"]["train"][0].as_str().unwrap();
     assert!(err.contains(first), "{err}");
+    // a folder on another template: the folder is named with the template the model expects
+    // and the command that writes hands on it
+    write_mesh(&template, &moved).unwrap();
+    let out = eval();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains(coarse.to_str().unwrap())
+            && err.contains("template of 717 vertices")
+            && err.contains("synth hands --subdivisions 1"),
+        "{err}"
+    );
 }
 
 #[test]

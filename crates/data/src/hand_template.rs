@@ -26,8 +26,9 @@ use crate::hand_pose::HandPose;
 use crate::hand_shape::HandShape;
 use crate::vec3::{M3, V3, add, axis_angle, column, mul_m, normalize, scale, sub, to_f32, to_f64};
 
-/// Default number of Catmull–Clark levels (11 265 vertices).
-pub const DEFAULT_HAND_SUBDIVISIONS: u32 = 3;
+/// Default number of Catmull–Clark levels (2 833 vertices): the template of the bundled
+/// Handy++ model, so `synth hands` and `handy` work together out of the box.
+pub const DEFAULT_HAND_SUBDIVISIONS: u32 = 2;
 
 /// A hand template of fixed topology at a given resolution.
 #[derive(Debug, Clone)]
@@ -274,7 +275,7 @@ fn build_cage(shape: &HandShape, pose: &HandPose) -> Cage {
 
 impl HandTemplate {
     /// The template refined by `subdivisions` Catmull–Clark levels, `1..=4`
-    /// (1: 717 vertices, 2: 2 833, 3 (default): 11 265, 4: 44 929).
+    /// (1: 717 vertices, 2 (default): 2 833, 3: 11 265, 4: 44 929).
     ///
     /// ```
     /// use meshgnn_data::HandTemplate;
