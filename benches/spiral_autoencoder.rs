@@ -37,7 +37,7 @@ fn spiral_autoencoder(c: &mut Criterion) {
     let device = Device::Cpu;
     let norm = VertexNormalization::fit(&hands, &device).unwrap();
     let config = SpiralAutoencoderConfig::default();
-    let model = SpiralMorphableModel::new(&template, &config, norm, 0, &device).unwrap();
+    let model = SpiralMorphableModel::new(&template, &config, norm, None, 0, &device).unwrap();
     eprintln!("levels {:?}", model.template_tensors().vertex_counts());
     let x = mesh_batch(&hands, &device).unwrap();
     let xn = model.normalization().normalize(&x).unwrap();

@@ -49,6 +49,10 @@ pub struct TrainArgs {
     /// Seed of the weights and the data order.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Add a fixed PCA path beside the spiral layers: the model starts as the PCA of the
+    /// training hands and learns the non-linear remainder (beyond the thesis).
+    #[arg(long)]
+    pub linear_skip: bool,
     /// Continue from the output file when it is a checkpoint of the same configuration.
     #[arg(long)]
     pub resume: bool,
@@ -118,6 +122,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             .take(args.levels + 1)
             .copied()
             .collect(),
+        linear_skip: args.linear_skip,
         ..defaults
     };
     let config = TrainingConfig {

@@ -179,7 +179,8 @@ mod tests {
         let shapes = deformed_shapes(&sphere, 3);
         let norm = VertexNormalization::fit(&shapes, &Device::Cpu).unwrap();
         let model =
-            SpiralMorphableModel::new(&sphere, &tiny_config(8), norm, 0, &Device::Cpu).unwrap();
+            SpiralMorphableModel::new(&sphere, &tiny_config(8), norm, None, 0, &Device::Cpu)
+                .unwrap();
         let mut c = model.to_checkpoint().unwrap();
         if with_gaussian {
             c.header.entries.insert(

@@ -3,6 +3,7 @@
 //! normalisation, self-contained model checkpoints and what it trains
 //! ([`SpiralTraining`], run by [`crate::training::train`]).
 
+mod linear_skip;
 mod mesh_batch;
 mod pool;
 mod seeded_initialization;
@@ -17,6 +18,7 @@ pub(crate) mod test_fixtures;
 mod unpool;
 mod vertex_normalization;
 
+pub use linear_skip::{LINEAR_SKIP_PREFIX, LinearSkip};
 pub use mesh_batch::mesh_batch;
 pub use pool::Pool;
 pub use seeded_initialization::seeded_initialization;

@@ -10,6 +10,10 @@
 //!   level `i`, `SpiralConv(c_{i+1} → c_i)` on level `i`, activation except on the last layer,
 //!   which outputs the 3 coordinates.
 //!
+//! - With `linear_skip` (beyond the thesis): `encode(x) = PCA(x) + E(x)` and
+//!   `decode(z) = PCA⁻¹(z) + D(z)` ([`LinearSkip`]); a fresh model's `encoder.latent` and
+//!   `decoder.conv0` are zero, so it starts as the PCA model.
+//!
 //! # Parameter names (the safetensors names)
 //! `encoder.conv{i}.{weight,bias}`, `encoder.latent.{weight,bias}`,
 //! `decoder.latent.{weight,bias}`, `decoder.conv{i}.{weight,bias}` (`i` = level).
@@ -21,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::handy::spiral::pool::check_vertices;
 use crate::handy::spiral::spiral_decoder::SpiralLevel;
-use crate::handy::spiral::{Pool, SpiralDecoder, SpiralPadding, TemplateTensors};
+use crate::handy::spiral::{LinearSkip, Pool, SpiralDecoder, SpiralPadding, TemplateTensors};
 use crate::{Error, Result};
 
 /// The non-linearity after every spiral convolution but the last.
@@ -62,6 +66,10 @@ pub struct SpiralAutoencoderConfig {
     pub activation: Activation,
     /// Treatment of padded spiral entries. Default repeat.
     pub padding: SpiralPadding,
+    /// Add the fixed PCA path ([`LinearSkip`]) to encoder and decoder, so the spiral layers
+    /// learn the non-linear remainder (beyond the thesis). Default off (Table 3.1).
+    #[serde(default)]
+    pub linear_skip: bool,
 }
 
 impl Default for SpiralAutoencoderConfig {
@@ -74,6 +82,7 @@ impl Default for SpiralAutoencoderConfig {
             dilations: vec![1; 5],
             activation: Activation::Elu,
             padding: SpiralPadding::Repeat,
+            linear_skip: false,
         }
     }
 }
@@ -138,6 +147,7 @@ pub struct SpiralAutoencoder {
     pools: Vec<Pool>,
     encoder_latent: Linear,
     decoder: SpiralDecoder,
+    skip: Option<LinearSkip>,
     activation: Activation,
     vertices: usize,
     coarse_vertices: usize,
@@ -157,7 +167,7 @@ impl SpiralAutoencoder {
     ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
     /// let template = TemplateTensors::new(&meshgnn_geometry::icosphere(2), &cfg.hierarchy_options(), &Device::Cpu)?;
     /// let vars = VarMap::new();
-    /// let net = SpiralAutoencoder::new(VarBuilder::from_varmap(&vars, DType::F32, &Device::Cpu), &cfg, &template)?;
+    /// let net = SpiralAutoencoder::new(VarBuilder::from_varmap(&vars, DType::F32, &Device::Cpu), &cfg, &template, None)?;
     /// let x = Tensor::zeros((2, 162, 3), DType::F32, &Device::Cpu)?;
     /// assert_eq!(net.encode(&x)?.dims(), &[2, 8]);
     /// assert_eq!(net.forward(&x)?.dims(), &[2, 162, 3]);
@@ -167,8 +177,36 @@ impl SpiralAutoencoder {
         vb: VarBuilder,
         config: &SpiralAutoencoderConfig,
         template: &TemplateTensors,
+        skip: Option<LinearSkip>,
     ) -> Result<Self> {
         config.validate(Some(template))?;
+        let v = template.vertex_counts()[0];
+        match &skip {
+            Some(s)
+                if !(config.linear_skip
+                    && s.latent_size() == config.latent_size
+                    && s.vertex_count() == v) =>
+            {
+                return Err(Error::Invalid {
+                    what: "linear skip".into(),
+                    reason: format!(
+                        "latent {} on {} vertices for a config of latent {} on {v} (linear_skip \
+                         {})",
+                        s.latent_size(),
+                        s.vertex_count(),
+                        config.latent_size,
+                        config.linear_skip
+                    ),
+                });
+            }
+            None if config.linear_skip => {
+                return Err(Error::Invalid {
+                    what: "linear skip".into(),
+                    reason: "the config asks for it, none given".into(),
+                });
+            }
+            _ => {}
+        }
         let n = config.channels.len();
         let mut channels = vec![3];
         channels.extend_from_slice(&config.channels);
@@ -205,8 +243,9 @@ impl SpiralAutoencoder {
                 config.activation,
                 config.padding,
             )?,
+            skip,
             activation: config.activation,
-            vertices: template.vertex_counts()[0],
+            vertices: v,
             coarse_vertices,
             coarse_channels,
             latent_size: config.latent_size,
@@ -238,12 +277,25 @@ impl SpiralAutoencoder {
         }
         let batch = h.dim(0)?;
         let flat = h.reshape((batch, self.coarse_vertices * self.coarse_channels))?;
-        Ok(self.encoder_latent.forward(&flat)?)
+        let z = self.encoder_latent.forward(&flat)?;
+        Ok(match &self.skip {
+            Some(skip) => (skip.encode(x)? + z)?,
+            None => z,
+        })
     }
 
     /// Decoder: `z: (B, Z)` → `(B, V, 3)`.
     pub fn decode(&self, z: &Tensor) -> Result<Tensor> {
-        self.decoder.forward(z)
+        let y = self.decoder.forward(z)?;
+        Ok(match &self.skip {
+            Some(skip) => (skip.decode(z)? + y)?,
+            None => y,
+        })
+    }
+
+    /// The PCA path, when the config has `linear_skip`.
+    pub fn linear_skip(&self) -> Option<&LinearSkip> {
+        self.skip.as_ref()
     }
 
     /// `decode(encode(x))`: `(B, V, 3)` → `(B, V, 3)`.
@@ -271,6 +323,7 @@ mod tests {
                 VarBuilder::from_varmap(&vars, DType::F32, &Device::Cpu),
                 &cfg,
                 &t,
+                None,
             )
             .unwrap();
             let x = Tensor::randn(0f32, 1.0, (3, 162, 3), &Device::Cpu).unwrap();
@@ -320,12 +373,12 @@ mod tests {
             channels: vec![8, 16, 32],
             ..cfg.clone()
         };
-        assert!(SpiralAutoencoder::new(vb(), &three_levels, &t).is_err());
+        assert!(SpiralAutoencoder::new(vb(), &three_levels, &t, None).is_err());
         let other_length = SpiralAutoencoderConfig {
             spiral_lengths: vec![7; 3],
             ..cfg.clone()
         };
-        assert!(SpiralAutoencoder::new(vb(), &other_length, &t).is_err());
+        assert!(SpiralAutoencoder::new(vb(), &other_length, &t, None).is_err());
         assert!(
             SpiralAutoencoderConfig {
                 latent_size: 0,

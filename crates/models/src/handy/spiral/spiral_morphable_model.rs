@@ -5,8 +5,9 @@
 //!
 //! # File format: a [`crate::Checkpoint`] of model [`SPIRAL_MODEL_NAME`]
 //! - Tensors: the network parameters (names in [`crate::handy::spiral::SpiralAutoencoder`]'s
-//!   docs), `normalization.mean` / `normalization.std` `(V, 3)` f32, and the template under
-//!   `template.` (table in [`crate::handy::spiral::TemplateTensors`]'s docs).
+//!   docs), `normalization.mean` / `normalization.std` `(V, 3)` f32, the template under
+//!   `template.` (table in [`crate::handy::spiral::TemplateTensors`]'s docs) and, with
+//!   `linear_skip`, the PCA path under `skip.` ([`LinearSkip`]).
 //! - Header: `config` = the [`SpiralAutoencoderConfig`]; training checkpoints add the
 //!   training state, `handy` adds the latent Gaussian as an entry. Files of the earlier
 //!   `meshgnn.spiral_morphable_model.v1` layout (the bundled Handy++) load unchanged.
@@ -20,7 +21,7 @@ use meshgnn_geometry::TriMesh;
 
 use crate::checkpoint::{checkpoint_of, lock, set_vars};
 use crate::handy::spiral::{
-    SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
+    LinearSkip, SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
     seeded_initialization,
 };
 use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, MorphableModel, Result};
@@ -53,7 +54,8 @@ impl std::fmt::Debug for SpiralMorphableModel {
 impl SpiralMorphableModel {
     /// A freshly initialised model (weights from `seed`) on `template`, whose hierarchy is
     /// built from `config.hierarchy_options()`; `normalization` is usually
-    /// [`VertexNormalization::fit`] of the training meshes.
+    /// [`VertexNormalization::fit`] of the training meshes, `skip` the PCA path a
+    /// `linear_skip` config needs ([`LinearSkip::from_pca`]; then the model starts as that PCA).
     ///
     /// ```
     /// use candle_core::Device;
@@ -63,7 +65,7 @@ impl SpiralMorphableModel {
     /// let cfg = SpiralAutoencoderConfig { channels: vec![8, 16], factors: vec![4.0; 2],
     ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
     /// let norm = VertexNormalization::fit(&[sphere.vertices().to_vec()], &Device::Cpu)?;
-    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, 0, &Device::Cpu)?;
+    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, None, 0, &Device::Cpu)?;
     /// assert_eq!((model.latent_size(), model.template().vertex_count()), (8, 162));
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
@@ -71,23 +73,22 @@ impl SpiralMorphableModel {
         template: &TriMesh,
         config: &SpiralAutoencoderConfig,
         normalization: VertexNormalization,
+        skip: Option<LinearSkip>,
         seed: u64,
         device: &Device,
     ) -> Result<Self> {
         config.validate(None)?;
         let tensors = TemplateTensors::new(template, &config.hierarchy_options(), device)?;
-        Self::from_template_tensors(tensors, config, normalization, seed)
-    }
-
-    /// A freshly initialised model (weights from `seed`) on an already built template.
-    pub fn from_template_tensors(
-        template: TemplateTensors,
-        config: &SpiralAutoencoderConfig,
-        normalization: VertexNormalization,
-        seed: u64,
-    ) -> Result<Self> {
-        let model = Self::assemble(template, config, normalization)?;
+        let model = Self::assemble(tensors, config, normalization, skip)?;
         seeded_initialization(&model.vars, seed)?;
+        if config.linear_skip {
+            // the spiral halves' last maps start at zero: the fresh model is its PCA path
+            for (name, var) in lock(&model.vars)?.iter() {
+                if name.starts_with("encoder.latent.") || name.starts_with("decoder.conv0.") {
+                    var.set(&var.zeros_like()?)?;
+                }
+            }
+        }
         Ok(model)
     }
 
@@ -95,6 +96,7 @@ impl SpiralMorphableModel {
         template: TemplateTensors,
         config: &SpiralAutoencoderConfig,
         normalization: VertexNormalization,
+        skip: Option<LinearSkip>,
     ) -> Result<Self> {
         let v = template.template().vertex_count();
         if normalization.mean().dims() != [v, 3] {
@@ -116,6 +118,7 @@ impl SpiralMorphableModel {
             VarBuilder::from_varmap(&vars, DType::F32, &device),
             config,
             &template,
+            skip,
         )?;
         Ok(Self {
             config: config.clone(),
@@ -171,6 +174,9 @@ impl SpiralMorphableModel {
         for (name, var) in lock(&self.vars)?.iter() {
             tensors.insert(name.clone(), var.as_tensor().to_device(&Device::Cpu)?);
         }
+        if let Some(skip) = self.network.linear_skip() {
+            tensors.extend(skip.to_named_tensors()?);
+        }
         let config = match serde_json::to_value(&self.config) {
             Ok(serde_json::Value::Object(config)) => config,
             Ok(_) => serde_json::Map::new(),
@@ -214,7 +220,7 @@ impl SpiralMorphableModel {
     /// let cfg = SpiralAutoencoderConfig { channels: vec![8, 16], factors: vec![4.0; 2],
     ///     spiral_lengths: vec![9; 3], dilations: vec![1; 3], ..Default::default() };
     /// let norm = VertexNormalization::fit(&[sphere.vertices().to_vec()], &Device::Cpu)?;
-    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, 0, &Device::Cpu)?;
+    /// let model = SpiralMorphableModel::new(&sphere, &cfg, norm, None, 0, &Device::Cpu)?;
     /// let copy = SpiralMorphableModel::from_bytes(&model.to_bytes()?, &Device::Cpu)?;
     /// let z = Tensor::ones((1, 8), candle_core::DType::F32, &Device::Cpu)?;
     /// let (a, b) = (model.decode(&z)?, copy.decode(&z)?);
@@ -259,7 +265,11 @@ impl SpiralMorphableModel {
             })
         };
         let normalization = VertexNormalization::from_tensors(get(MEAN)?, get(STD)?)?;
-        let model = Self::assemble(template, &config, normalization)?;
+        let skip = match config.linear_skip {
+            true => Some(LinearSkip::from_named_tensors(&tensors, device)?),
+            false => None,
+        };
+        let model = Self::assemble(template, &config, normalization, skip)?;
         set_vars(&model.vars, &tensors)?;
         Ok(model)
     }
@@ -313,8 +323,8 @@ mod tests {
         let sphere = meshgnn_geometry::icosphere(2);
         let shapes = deformed_shapes(&sphere, 4);
         let norm = VertexNormalization::fit(&shapes, &Device::Cpu).unwrap();
-        let m =
-            SpiralMorphableModel::new(&sphere, &tiny_config(8), norm, seed, &Device::Cpu).unwrap();
+        let m = SpiralMorphableModel::new(&sphere, &tiny_config(8), norm, None, seed, &Device::Cpu)
+            .unwrap();
         (m, mesh_batch(&shapes, &Device::Cpu).unwrap())
     }
 

@@ -2,7 +2,10 @@
 //! meshes"; Adam as Neural3DMM, Bouritsas et al. ICCV 2019): per-vertex normalisation fitted
 //! on the training split, L1 on normalised coordinates
 //! (`meshgnn_losses::losses::reconstruction_l1`, eq. 4.2), validation as the mean per-vertex
-//! Euclidean error in data units. The loop itself (seeded batches, Adam with the per-epoch
+//! Euclidean error in data units. A model with the PCA path (`linear_skip`) trains on the L1
+//! error in data units instead: normalised coordinates weigh the vertices that vary least
+//! the most, so their L1 pulls a model that starts at the PCA (optimal in data units) away
+//! from it — measured: 2.17 → 2.44 mm on its own training hands in 16 epochs. The loop itself (seeded batches, Adam with the per-epoch
 //! decay, checkpoints, resuming) is [`crate::training::train`].
 
 use std::path::Path;
@@ -14,11 +17,11 @@ use meshgnn_losses::losses::reconstruction_l1;
 use crate::adam::sorted_vars;
 use crate::handy::spiral::vertex_normalization::check_meshes;
 use crate::handy::spiral::{
-    SPIRAL_MODEL_NAME, SpiralAutoencoderConfig, SpiralMorphableModel, VertexNormalization,
-    mesh_batch,
+    LinearSkip, SPIRAL_MODEL_NAME, SpiralAutoencoderConfig, SpiralMorphableModel,
+    VertexNormalization, mesh_batch,
 };
 use crate::training::{BatchLoss, StepContext, Trainable};
-use crate::{Checkpoint, MorphableModel, Result};
+use crate::{Checkpoint, MorphableModel, Pca, Result};
 
 /// Meshes per forward pass of the validation.
 const VALIDATION_BATCH: usize = 32;
@@ -35,7 +38,8 @@ pub struct SpiralTraining {
 }
 
 impl SpiralTraining {
-    /// A fresh model (weights from `seed`, normalisation fitted on `train`) of the registered
+    /// A fresh model (weights from `seed`, normalisation — and with `linear_skip` the PCA
+    /// path — fitted on `train`) of the registered
     /// meshes `train: #S × (#V×3)` on `template`'s faces, validated on `validation` (may be
     /// empty). Errors when the meshes disagree with the template or a coordinate is not finite.
     ///
@@ -70,7 +74,14 @@ impl SpiralTraining {
             check_meshes("validation meshes", validation, Some(v))?;
         }
         let normalization = VertexNormalization::fit(train, device)?;
-        let model = SpiralMorphableModel::new(template, config, normalization, seed, device)?;
+        let skip = match config.linear_skip {
+            true => Some(LinearSkip::from_pca(
+                &Pca::fit(template, train, config.latent_size)?,
+                &normalization,
+            )?),
+            false => None,
+        };
+        let model = SpiralMorphableModel::new(template, config, normalization, skip, seed, device)?;
         let mut task = Self {
             train_data: Tensor::zeros(1, candle_core::DType::F32, device)?,
             validation_data: None,
@@ -129,8 +140,15 @@ impl Trainable for SpiralTraining {
             .model
             .normalization()
             .euclidean_error(&predicted.detach(), &x)?;
+        let loss = if self.model.config().linear_skip {
+            // in data units, where the PCA path is optimal (see the module docs)
+            let std = self.model.normalization().std();
+            reconstruction_l1(&predicted.broadcast_mul(std)?, &x.broadcast_mul(std)?)?
+        } else {
+            reconstruction_l1(&predicted, &x)?
+        };
         Ok(BatchLoss {
-            loss: reconstruction_l1(&predicted, &x)?,
+            loss,
             figure: Some(f64::from(mm.to_scalar::<f32>()?)),
         })
     }
@@ -259,6 +277,65 @@ mod tests {
             "{last:?} vs spread {spread}"
         );
         assert!(last.loss < 0.1 * first.loss, "{first:?} {last:?}");
+    }
+
+    #[test]
+    fn with_the_linear_skip_a_fresh_model_is_the_pca_and_training_beats_it() {
+        // a finger-like bend: the upper half rotates about the x axis by 0-90 degrees, an arc
+        // that one linear component cannot follow
+        let sphere = meshgnn_geometry::icosphere(2);
+        let shapes: Vec<Vec<[f32; 3]>> = (0..12)
+            .map(|i| {
+                let angle = 1.5 * i as f32 / 11.0;
+                sphere
+                    .vertices()
+                    .iter()
+                    .map(|p| {
+                        let (s, c) = (angle * p[1].max(0.0)).sin_cos();
+                        [
+                            10.0 * p[0],
+                            10.0 * (c * p[1] - s * p[2]),
+                            10.0 * (s * p[1] + c * p[2]),
+                        ]
+                    })
+                    .collect()
+            })
+            .collect();
+        let config = SpiralAutoencoderConfig {
+            linear_skip: true,
+            ..tiny_config(1)
+        };
+        let mut task =
+            SpiralTraining::new(&sphere, &config, &shapes, &shapes, 2, &Device::Cpu).unwrap();
+        let pca = Pca::fit(&sphere, &shapes, 1).unwrap();
+        let pca_error = crate::generalisation_error(&pca, &shapes).unwrap().mean;
+        let start = task.validation().unwrap().unwrap();
+        assert!(
+            (start - pca_error).abs() < 1e-4 * pca_error.max(1.0),
+            "fresh {start} mm, PCA {pca_error} mm"
+        );
+        let config = TrainingConfig {
+            epochs: 150,
+            batch_size: 4,
+            learning_rate: 3e-3,
+            ..Default::default()
+        };
+        train(&mut task, &config, &mut |_| {}).unwrap();
+        let end = task.validation().unwrap().unwrap();
+        assert!(
+            end < 0.8 * pca_error,
+            "trained {end} mm, PCA {pca_error} mm"
+        );
+        // the skip travels with the model file
+        let bytes = task.model().to_bytes().unwrap();
+        let back = SpiralMorphableModel::from_bytes(&bytes, &Device::Cpu).unwrap();
+        assert!(back.network().linear_skip().is_some());
+        let x = mesh_batch(&shapes, &Device::Cpu).unwrap();
+        let values = |t: Tensor| t.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+        assert_eq!(
+            values(back.reconstruct(&x).unwrap()),
+            values(task.model().reconstruct(&x).unwrap())
+        );
     }
 
     #[test]
