@@ -7,7 +7,7 @@ use candle_core::Device;
 use meshgnn_models::expression::ExpressionModel;
 use meshgnn_models::pretrained;
 
-/// The bundled expression generator (spiral decoder).
+/// The bundled expression generator (residual decoder: blendshapes + spiral remainder).
 pub const BUNDLED_GENERATOR: &str = "expression_generator";
 /// The bundled blendshape baseline.
 pub const BUNDLED_BLENDSHAPE: &str = "expression_blendshape";

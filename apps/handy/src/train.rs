@@ -35,7 +35,7 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = 4)]
     pub levels: usize,
     /// Passes over the training split.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 150)]
     pub epochs: usize,
     /// Meshes per step.
     #[arg(long, default_value_t = 8)]
@@ -44,15 +44,16 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = 1e-3)]
     pub lr: f64,
     /// Learning-rate factor per epoch.
-    #[arg(long, default_value_t = 0.96)]
+    #[arg(long, default_value_t = 0.98)]
     pub lr_decay: f64,
     /// Seed of the weights and the data order.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Add a fixed PCA path beside the spiral layers: the model starts as the PCA of the
-    /// training hands and learns the non-linear remainder (beyond the thesis).
+    /// Train the thesis' Table 3.1 network alone. By default a fixed PCA path runs beside
+    /// the spiral layers: the model starts as the PCA of the training hands and learns the
+    /// non-linear remainder (beyond the thesis).
     #[arg(long)]
-    pub linear_skip: bool,
+    pub no_linear_skip: bool,
     /// Continue from the output file when it is a checkpoint of the same configuration.
     #[arg(long)]
     pub resume: bool,
@@ -122,7 +123,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             .take(args.levels + 1)
             .copied()
             .collect(),
-        linear_skip: args.linear_skip,
+        linear_skip: !args.no_linear_skip,
         ..defaults
     };
     let config = TrainingConfig {
@@ -212,6 +213,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         .with_context(|| format!("writing {}", args.output.display()))?;
     let summary = json!({
         "latent": args.latent,
+        "linear_skip": !args.no_linear_skip,
         "epochs": args.epochs,
         "seed": args.seed,
         "train_meshes": train.len(),

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | `hand_autoencoder` | Handy++, latent 8 (docs/handy.md) | [`crate::LoadedHandModel`], [`crate::handy::spiral::SpiralMorphableModel`] |
 //! | `point_simplifier` | the point simplifier of ch. 5.3 (docs/pcsimplify_model.md) | [`crate::point_simplifier::PointSimplifier`] |
-//! | `expression_generator` | the ch. 4 expression generator, spiral decoder (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
+//! | `expression_generator` | the ch. 4 expression generator, residual decoder: blendshapes + spiral remainder (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
 //! | `expression_blendshape` | its PCA blendshape baseline (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
 
 use std::path::Path;
@@ -143,7 +143,7 @@ mod tests {
     }
 
     #[test]
-    fn the_committed_files_of_the_earlier_layouts_still_load() {
+    fn the_bundled_files_load_as_the_models_they_are() {
         let hand: LoadedHandModel = load("hand_autoencoder").unwrap();
         assert_eq!(hand.model.latent_size(), 8);
         assert_eq!(hand.model.template().vertex_count(), 2833);
@@ -153,7 +153,7 @@ mod tests {
         for (name, decoder) in [
             (
                 "expression_generator",
-                crate::expression::DecoderKind::Spiral,
+                crate::expression::DecoderKind::Residual,
             ),
             (
                 "expression_blendshape",
