@@ -131,6 +131,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         batch_size: args.batch_size,
         learning_rate: args.lr,
         lr_decay: args.lr_decay,
+        weight_decay: 0.0,
         seed: args.seed,
         checkpoint: Some(args.output.clone()),
         // `--resume` without a checkpoint yet starts afresh

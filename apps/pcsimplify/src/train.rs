@@ -158,6 +158,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         batch_size: 1,
         learning_rate: args.learning_rate,
         lr_decay: 0.99,
+        weight_decay: 0.0,
         seed: args.seed,
         checkpoint: Some(checkpoint.clone()),
         resume: args.resume,

@@ -3,8 +3,9 @@
 //! as named tensors so a checkpoint holds them and a resumed run continues bit-exactly.
 //!
 //! # Conventions
-//! - Step `t` (1-based): `m ← β₁m + (1−β₁)g`, `v ← β₂v + (1−β₂)g²`,
-//!   `θ ← θ − lr · (m / (1−β₁ᵗ)) / (√(v / (1−β₂ᵗ)) + ε)`; no weight decay.
+//! - Step `t` (1-based): `g ← ∇θ + λθ` (weight decay `λ`, PyTorch's `Adam(weight_decay=λ)`,
+//!   the thesis' ch. 4 setting), `m ← β₁m + (1−β₁)g`, `v ← β₂v + (1−β₂)g²`,
+//!   `θ ← θ − lr · (m / (1−β₁ᵗ)) / (√(v / (1−β₂ᵗ)) + ε)`.
 //! - Parameters are kept in the order given (callers pass them sorted by name); a parameter
 //!   without a gradient is left unchanged, its moments too.
 //! - State tensors are named `<prefix>m.<name>` and `<prefix>v.<name>`; the step count is not a
@@ -30,6 +31,8 @@ pub struct AdamConfig {
     pub beta2: f64,
     /// Denominator guard `ε`.
     pub epsilon: f64,
+    /// Weight decay `λ` added to every gradient as `λθ`. Default 0.
+    pub weight_decay: f64,
 }
 
 impl Default for AdamConfig {
@@ -39,6 +42,7 @@ impl Default for AdamConfig {
             beta1: 0.9,
             beta2: 0.999,
             epsilon: 1e-8,
+            weight_decay: 0.0,
         }
     }
 }
@@ -56,7 +60,7 @@ pub struct Adam {
 
 impl Adam {
     /// Adam over `params: [(name, var)]` with zero moments and step 0. Errors when the config
-    /// is not `lr > 0, 0 ≤ β < 1, ε > 0` (all finite) or a name repeats.
+    /// is not `lr > 0, 0 ≤ β < 1, ε > 0, λ ≥ 0` (all finite) or a name repeats.
     ///
     /// ```
     /// use candle_core::{Device, Tensor, Var};
@@ -72,14 +76,16 @@ impl Adam {
     pub fn new(params: Vec<(String, Var)>, config: AdamConfig) -> Result<Self> {
         let beta = |b: f64| b.is_finite() && (0.0..1.0).contains(&b);
         let positive = |x: f64| x.is_finite() && x > 0.0;
+        let decay = config.weight_decay.is_finite() && config.weight_decay >= 0.0;
         if !positive(config.learning_rate)
             || !beta(config.beta1)
             || !beta(config.beta2)
             || !positive(config.epsilon)
+            || !decay
         {
             return Err(Error::Invalid {
                 what: "Adam config".into(),
-                reason: format!("{config:?}: needs lr > 0, 0 ≤ β < 1 and ε > 0"),
+                reason: format!("{config:?}: needs lr > 0, 0 ≤ β < 1, ε > 0 and λ ≥ 0"),
             });
         }
         let mut seen = std::collections::HashSet::new();
@@ -136,6 +142,7 @@ impl Adam {
             beta1,
             beta2,
             epsilon,
+            weight_decay,
         } = self.config;
         let c1 = 1.0 - beta1.powi(t);
         let c2 = 1.0 - beta2.powi(t);
@@ -147,6 +154,13 @@ impl Adam {
         {
             let Some(g) = grads.get(var.as_tensor()) else {
                 continue;
+            };
+            let decayed;
+            let g = if weight_decay > 0.0 {
+                decayed = g.add(&var.as_detached_tensor().affine(weight_decay, 0.0)?)?;
+                &decayed
+            } else {
+                g
             };
             *m = m.affine(beta1, 0.0)?.add(&g.affine(1.0 - beta1, 0.0)?)?;
             *v = v
@@ -263,6 +277,35 @@ mod tests {
         let x2 = x.as_tensor().to_vec1::<f32>().unwrap()[0];
         assert!((x2 - 1.800_398).abs() < 2e-5, "{x2}");
         assert_eq!(adam.steps(), 2);
+    }
+
+    #[test]
+    fn weight_decay_adds_lambda_theta_to_the_gradient() {
+        // f(x) = x² at x = 3 with λ = 2: g = 6 + 2·3 = 12, as f = x³ at x = 2 above, so the
+        // first step is the same −lr·sign(g); the second differs from λ = 0's.
+        let step = |weight_decay: f64| {
+            let x = Var::new(&[3.0f32], &Device::Cpu).unwrap();
+            let config = AdamConfig {
+                learning_rate: 0.1,
+                weight_decay,
+                ..Default::default()
+            };
+            let mut adam = Adam::new(vec![("x".into(), x.clone())], config).unwrap();
+            let loss = |x: &Var| x.as_tensor().sqr().unwrap().sum_all().unwrap();
+            adam.backward_step(&loss(&x)).unwrap();
+            let state: HashMap<String, Tensor> = adam.state_tensors("o.").into_iter().collect();
+            let m = state["o.m.x"].to_vec1::<f32>().unwrap()[0];
+            (x.as_tensor().to_vec1::<f32>().unwrap()[0], m)
+        };
+        let (x, m) = step(2.0);
+        assert!((x - 2.9).abs() < 1e-6 && (m - 1.2).abs() < 1e-6, "{x} {m}");
+        let (_, m0) = step(0.0);
+        assert!((m0 - 0.6).abs() < 1e-6, "{m0}");
+        let bad = AdamConfig {
+            weight_decay: -1.0,
+            ..Default::default()
+        };
+        assert!(Adam::new(vec![], bad).is_err());
     }
 
     #[test]

@@ -31,6 +31,8 @@ pub struct TrainingConfig {
     pub learning_rate: f64,
     /// Learning rate factor per epoch (`lr_e = lr · decay^e`). Default 0.99.
     pub lr_decay: f64,
+    /// Adam's weight decay `λ` (see [`crate::adam`]). Default 0.
+    pub weight_decay: f64,
     /// Seed of the data order (and of whatever the model draws per step). Default 0.
     pub seed: u64,
     /// Resumable checkpoint written (atomically) after every epoch; none when `None`.
@@ -49,6 +51,7 @@ impl Default for TrainingConfig {
             batch_size: 16,
             learning_rate: 1e-3,
             lr_decay: 0.99,
+            weight_decay: 0.0,
             seed: 0,
             checkpoint: None,
             resume: false,
@@ -118,6 +121,7 @@ pub fn train(
         model.parameters(),
         AdamConfig {
             learning_rate: config.learning_rate,
+            weight_decay: config.weight_decay,
             ..Default::default()
         },
     )?;
