@@ -1,10 +1,12 @@
 //! `handy fit`: fits the model (latent code + similarity transform) to a scan by Chamfer
-//! distance (thesis ch. 3.4.4) and writes the fitted mesh in the scan's coordinates.
+//! distance (thesis ch. 3.4.4) and writes the fitted mesh in the scan's coordinates
+//! (`--preview`: the scan over the fit, three views).
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use meshgnn_data::{View, points_on_mesh_sheet, write_png};
 use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_input_point_cloud, write_mesh};
 use meshgnn_models::{ChamferDirection, MAX_FIT_STEPS, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;
@@ -39,13 +41,24 @@ pub struct FitArgs {
     /// Seed of the scan subsampling.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Write a PNG: the scan's points (orange) over the fitted mesh, from the front, the side
+    /// and above.
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
 }
 
+/// Pixels per side of each `--preview` view.
+const PREVIEW_TILE: u32 = 400;
+
 pub fn run(args: &FitArgs) -> Result<()> {
-    OutputGuard::new(std::iter::once(&args.scan).chain(&args.model)).check(&args.output)?;
+    let guard = OutputGuard::new(std::iter::once(&args.scan).chain(&args.model));
+    guard.check(&args.output)?;
+    if let Some(p) = &args.preview {
+        guard.check(p)?;
+    }
     check_count(
         "--steps",
         args.steps,
@@ -77,6 +90,13 @@ pub fn run(args: &FitArgs) -> Result<()> {
     let mesh = TriMesh::new(fit.vertices, loaded.model.template().triangles().to_vec())?;
     write_mesh(&args.output, &mesh)
         .with_context(|| format!("writing {}", args.output.display()))?;
+    if let Some(p) = &args.preview {
+        let views = [(0.0, 0.0), (90.0, 0.0), (0.0, 90.0)].map(|(yaw, pitch)| View { yaw, pitch });
+        write_png(
+            p,
+            &points_on_mesh_sheet(&mesh, scan.points(), &views, PREVIEW_TILE)?,
+        )?;
+    }
     if args.json {
         println!(
             "{}",
@@ -90,6 +110,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
                 "translation": fit.transform.translation,
                 "loss": fit.loss,
                 "output": args.output.display().to_string(),
+                "preview": args.preview.as_ref().map(|p| p.display().to_string()),
             })
         );
     } else {

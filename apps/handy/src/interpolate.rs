@@ -56,7 +56,7 @@ pub fn run(args: &InterpolateArgs) -> Result<()> {
         &OutputGuard::new([&args.a, &args.b].into_iter().chain(&args.model)),
         &args.output,
         "interp",
-        "interpolation.png",
+        args.output.join("interpolation.png"),
         4,
         loaded.model.template(),
         shapes,

@@ -19,9 +19,12 @@ pub struct SampleArgs {
     /// Number of hands (1 to 1000).
     #[arg(short = 'n', long, default_value_t = 10)]
     pub count: usize,
-    /// Output folder (created): `sample_000.obj`, …, `samples.png`.
+    /// Output folder (created): `sample_000.obj`, …, and the contact sheet `samples.png`.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write the contact sheet here instead of `OUTPUT/samples.png`.
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
     /// Model file (default: the built-in Handy++ model).
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -47,7 +50,9 @@ pub fn run(args: &SampleArgs) -> Result<()> {
         &OutputGuard::new(&args.model),
         &args.output,
         "sample",
-        "samples.png",
+        args.preview
+            .clone()
+            .unwrap_or_else(|| args.output.join("samples.png")),
         5,
         loaded.model.template(),
         shapes,

@@ -18,13 +18,14 @@ pub struct ShapeFolder {
 }
 
 /// Writes each shape (vertices on the template's faces) as `{prefix}_{i:03}.obj` in `output`
-/// (created) and all of them as a contact sheet `sheet_name` with `columns` columns. The
-/// folder and every file are checked against `guard` before anything is created.
+/// (created) and all of them as the contact sheet `sheet` (a PNG path) with `columns`
+/// columns. The folder and every file are checked against `guard` before anything is
+/// created.
 pub fn write_shape_folder(
     guard: &OutputGuard,
     output: &Path,
     prefix: &str,
-    sheet_name: &str,
+    sheet: PathBuf,
     columns: u32,
     template: &TriMesh,
     shapes: Vec<Vec<[f32; 3]>>,
@@ -32,7 +33,6 @@ pub fn write_shape_folder(
     let paths: Vec<PathBuf> = (0..shapes.len())
         .map(|i| output.join(format!("{prefix}_{i:03}.obj")))
         .collect();
-    let sheet = output.join(sheet_name);
     for path in std::iter::once(output).chain(paths.iter().map(PathBuf::as_path)) {
         guard.check(path)?;
     }

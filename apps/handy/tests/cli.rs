@@ -192,8 +192,9 @@ fn sample_writes_meshes_on_the_template_and_a_contact_sheet() {
             .len()
             > 100
     );
-    // same seed, same hands
+    // same seed, same hands; --preview puts the same sheet where it is asked for
     let again = dir.path().join("t");
+    let sheet = dir.path().join("sheet.png");
     ok(&handy(&[
         "sample",
         "-n",
@@ -204,11 +205,27 @@ fn sample_writes_meshes_on_the_template_and_a_contact_sheet() {
         model,
         "--seed",
         "5",
+        "--preview",
+        sheet.to_str().unwrap(),
     ]));
     assert_eq!(
         std::fs::read(out_dir.join("sample_001.obj")).unwrap(),
         std::fs::read(again.join("sample_001.obj")).unwrap()
     );
+    assert_eq!(
+        std::fs::read(out_dir.join("samples.png")).unwrap(),
+        std::fs::read(&sheet).unwrap()
+    );
+    assert!(!again.join("samples.png").exists());
+}
+
+/// Width and height of a PNG file (its IHDR chunk).
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let word =
+        |at: usize| u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    (word(16), word(20))
 }
 
 #[test]
@@ -228,9 +245,14 @@ fn fit_recovers_a_scan_of_a_test_hand() {
         f.model.to_str().unwrap(),
         "--steps",
         "30",
+        "--preview",
+        dir.path().join("fit.png").to_str().unwrap(),
         "--json",
     ]);
     let r: Value = serde_json::from_str(&ok(&out)).unwrap();
+    // front, side and top views of the scan over the fit
+    assert_eq!(png_size(&dir.path().join("fit.png")), (1200, 400));
+    assert!(r["preview"].as_str().unwrap().ends_with("fit.png"), "{r}");
     let (r2s, s2r) = (r["r2s_mm"].as_f64().unwrap(), r["s2r_mm"].as_f64().unwrap());
     assert!(r2s > 0.0 && r2s < 30.0 && s2r > 0.0 && s2r < 30.0, "{r}");
     assert_eq!(

@@ -59,7 +59,7 @@ pub use hand_dataset::{CHILD_AGE, HandSample, HandSetConfig, hand_splits};
 pub use hand_pose::{FINGER_FLEXION_DEG, HandPose, OPPOSITION_DEG, SPREAD_DEG, THUMB_FLEXION_DEG};
 pub use hand_shape::{FINGER_NAMES, HandShape};
 pub use hand_template::{DEFAULT_HAND_SUBDIVISIONS, HandTemplate};
-pub use point_preview::{ColoredPoints, point_cloud_sheet, value_colors};
+pub use point_preview::{ColoredPoints, point_cloud_sheet, points_on_mesh_sheet, value_colors};
 pub use preview::{RgbImage, View, contact_sheet, encode_png, render_mesh, write_png};
 pub use self_intersections::{self_intersecting_pairs, self_intersections};
 pub use shapes::{

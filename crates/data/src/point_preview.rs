@@ -1,7 +1,7 @@
 //! PNG previews of point clouds: round splats in a z-buffer, coloured per point and darkened
 //! with depth, so a user sees at a glance which points a simplification kept (the
 //! `pcsimplify simplify --preview` sheet: input and kept points side by side, coloured by
-//! curvature).
+//! curvature) or how a fitted mesh lies on a scan (`handy fit --preview`).
 //!
 //! # Conventions
 //! - Views, tiles and images as in the mesh previews ([`crate::render_mesh`]).
@@ -14,7 +14,9 @@ use rayon::prelude::*;
 
 use crate::count_bounds::MAX_PREVIEW_PIXELS;
 use crate::error::{Result, invalid};
-use crate::preview::{BACKGROUND, Projection, RgbImage, View, check_tile_size, tile_images};
+use meshgnn_geometry::TriMesh;
+
+use crate::preview::{Layer, Projection, RgbImage, View, check_tile_size, tile_images};
 
 /// Points `#P×3` with one RGB colour (in `[0, 1]`) each.
 #[derive(Debug, Clone, Copy)]
@@ -66,52 +68,43 @@ pub fn value_colors(values: &[f32]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Renders `cloud` into a `size × size` tile framed by `projection`.
-fn render_splats(cloud: ColoredPoints, size: u32, projection: &Projection) -> RgbImage {
-    let n = size as usize;
-    let spacing = 0.88 * f64::from(size) / (cloud.points.len().max(1) as f64).sqrt();
-    let radius = (0.5 * spacing).clamp(1.0, 6.0);
-    let screen: Vec<[f64; 3]> = cloud
-        .points
-        .par_iter()
-        .map(|&p| projection.to_screen(p))
-        .collect();
-    let (near, far) = screen.iter().fold((f64::MIN, f64::MAX), |(hi, lo), p| {
-        (hi.max(p[2]), lo.min(p[2]))
-    });
-    let mut depth = vec![f64::NEG_INFINITY; n * n];
-    let mut color = vec![None; n * n];
-    let reach = radius.ceil() as isize;
-    for (p, c) in screen.iter().zip(cloud.colors) {
-        let (cx, cy) = (p[0].floor() as isize, p[1].floor() as isize);
-        for y in cy - reach..=cy + reach {
-            for x in cx - reach..=cx + reach {
-                let (dx, dy) = (x as f64 + 0.5 - p[0], y as f64 + 0.5 - p[1]);
-                if x < 0 || y < 0 || x >= n as isize || y >= n as isize {
-                    continue;
-                }
-                let i = y as usize * n + x as usize;
-                if dx * dx + dy * dy <= radius * radius && p[2] > depth[i] {
-                    depth[i] = p[2];
-                    color[i] = Some(*c);
+impl Layer {
+    /// Draws `cloud` through `projection` as round splats (radius in the module docs),
+    /// darkened with depth; a splat wins a pixel when it is nearer than what is there by
+    /// `-bias` (a positive bias lets points on a drawn surface show through it).
+    pub(crate) fn draw_splats(&mut self, cloud: ColoredPoints, projection: &Projection, bias: f64) {
+        let n = self.side();
+        let spacing = 0.88 * n as f64 / (cloud.points.len().max(1) as f64).sqrt();
+        let radius = (0.5 * spacing).clamp(1.0, 6.0);
+        let screen: Vec<[f64; 3]> = cloud
+            .points
+            .par_iter()
+            .map(|&p| projection.to_screen(p))
+            .collect();
+        let (near, far) = screen.iter().fold((f64::MIN, f64::MAX), |(hi, lo), p| {
+            (hi.max(p[2]), lo.min(p[2]))
+        });
+        let reach = radius.ceil() as isize;
+        for (p, c) in screen.iter().zip(cloud.colors) {
+            let shade = match near - far {
+                span if span > 1e-12 => 0.55 + 0.45 * ((p[2] - far) / span).clamp(0.0, 1.0),
+                _ => 1.0,
+            };
+            let (cx, cy) = (p[0].floor() as isize, p[1].floor() as isize);
+            for y in cy - reach..=cy + reach {
+                for x in cx - reach..=cx + reach {
+                    if x < 0 || y < 0 || x >= n as isize || y >= n as isize {
+                        continue;
+                    }
+                    let (dx, dy) = (x as f64 + 0.5 - p[0], y as f64 + 0.5 - p[1]);
+                    let i = y as usize * n + x as usize;
+                    if dx * dx + dy * dy <= radius * radius && p[2] + bias > self.depth[i] {
+                        self.depth[i] = p[2] + bias;
+                        self.color[i] = Some(c.map(|v| shade * v));
+                    }
                 }
             }
         }
-    }
-    let mut pixels = Vec::with_capacity(n * n * 3);
-    for (z, c) in depth.iter().zip(&color) {
-        match c {
-            None => pixels.extend_from_slice(&BACKGROUND),
-            Some(c) => {
-                let shade = 0.55 + 0.45 * ((z - far) / (near - far).max(1e-12)).clamp(0.0, 1.0);
-                pixels.extend(c.map(|v| (255.0 * (shade * v).clamp(0.0, 1.0)).round() as u8));
-            }
-        }
-    }
-    RgbImage {
-        width: size,
-        height: size,
-        pixels,
     }
 }
 
@@ -152,14 +145,76 @@ pub fn point_cloud_sheet(clouds: &[ColoredPoints], tile: u32, view: View) -> Res
     let projection = Projection::fitted(first.points, tile, view);
     let tiles: Vec<RgbImage> = clouds
         .par_iter()
-        .map(|&c| render_splats(c, tile, &projection))
+        .map(|&c| {
+            let mut layer = Layer::new(tile);
+            layer.draw_splats(c, &projection, 0.0);
+            layer.into_image()
+        })
         .collect();
     Ok(tile_images(&tiles, clouds.len() as u32, tile))
+}
+
+/// Colour of the points in [`points_on_mesh_sheet`] (orange), beside the mesh's blue-grey.
+const OVERLAY_POINTS: [f64; 3] = [0.95, 0.45, 0.1];
+const OVERLAY_MESH: [f64; 3] = [0.75, 0.82, 0.92];
+
+/// `points` (a scan, say) drawn over `mesh` (a model fitted to it), one `tile`-pixel tile per
+/// view, side by side, each framed on both. Points in front of the surface and up to 1 % of
+/// the framing's extent behind it show; points further behind are hidden.
+///
+/// ```
+/// use meshgnn_data::{View, points_on_mesh_sheet};
+/// let sphere = meshgnn_geometry::icosphere(2);
+/// let views = [View { yaw: 0.0, pitch: 0.0 }, View { yaw: 90.0, pitch: 0.0 }];
+/// let sheet = points_on_mesh_sheet(&sphere, sphere.vertices(), &views, 64)?;
+/// assert_eq!((sheet.width, sheet.height), (128, 64));
+/// # Ok::<(), meshgnn_data::Error>(())
+/// ```
+pub fn points_on_mesh_sheet(
+    mesh: &TriMesh,
+    points: &[[f32; 3]],
+    views: &[View],
+    tile: u32,
+) -> Result<RgbImage> {
+    check_tile_size(tile)?;
+    if mesh.face_count() == 0 || views.is_empty() {
+        return Err(invalid(
+            "mesh",
+            mesh.face_count(),
+            "needs faces and at least one view",
+        ));
+    }
+    let pixels = views.len() as u64 * u64::from(tile) * u64::from(tile);
+    if pixels > MAX_PREVIEW_PIXELS as u64 {
+        return Err(invalid(
+            "views",
+            views.len(),
+            &format!("{pixels} pixels, above the {MAX_PREVIEW_PIXELS} of MAX_PREVIEW_PIXELS"),
+        ));
+    }
+    let both: Vec<[f32; 3]> = mesh.vertices().iter().chain(points).copied().collect();
+    let colors = vec![OVERLAY_POINTS; points.len()];
+    let tiles: Vec<RgbImage> = views
+        .par_iter()
+        .map(|&view| {
+            let projection = Projection::fitted(&both, tile, view);
+            let mut layer = Layer::new(tile);
+            layer.draw_mesh(mesh, &projection, OVERLAY_MESH);
+            let cloud = ColoredPoints {
+                points,
+                colors: &colors,
+            };
+            layer.draw_splats(cloud, &projection, 0.01 * projection.extent());
+            layer.into_image()
+        })
+        .collect();
+    Ok(tile_images(&tiles, views.len() as u32, tile))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::preview::BACKGROUND;
 
     const FRONT: View = View {
         yaw: 0.0,
@@ -197,7 +252,7 @@ mod tests {
         let sheet = point_cloud_sheet(&[all, blue], 64, FRONT).unwrap();
         let centre = pixel(&sheet, 32, 32);
         assert!(centre[0] > 200 && centre[2] == 0, "{centre:?}");
-        // the blue point alone, in the second tile, at the same place, darkened by depth
+        // the blue point alone, in the second tile, at the same place
         let right = pixel(&sheet, 64 + 32, 32);
         assert!(right[2] > 100 && right[0] == 0, "{right:?}");
         // corners: the green corner points sit at the 6 % margin, the tile's corner is empty
@@ -205,6 +260,28 @@ mod tests {
         assert_eq!(pixel(&sheet, 64 + 63, 63), BACKGROUND);
         let corner = pixel(&sheet, 4, 60);
         assert!(corner[1] > 100, "{corner:?}");
+    }
+
+    #[test]
+    fn points_on_the_visible_surface_show_and_points_behind_it_do_not() {
+        let sphere = meshgnn_geometry::icosphere(3);
+        // the view looks along −z: +z is the front of the sphere
+        let front = [[0.0f32, 0.0, 1.0]];
+        let back = [[0.0f32, 0.0, -1.0]];
+        let centre = |points: &[[f32; 3]]| {
+            let sheet = points_on_mesh_sheet(&sphere, points, &[FRONT], 64).unwrap();
+            pixel(&sheet, 32, 32)
+        };
+        let shown = centre(&front);
+        assert!(shown[0] > 150 && shown[2] < 80, "front point: {shown:?}");
+        let hidden = centre(&back);
+        assert!(
+            hidden[2] > hidden[0],
+            "back point hidden by the surface: {hidden:?}"
+        );
+        let sheet = points_on_mesh_sheet(&sphere, &front, &[FRONT, FRONT, FRONT], 32).unwrap();
+        assert_eq!((sheet.width, sheet.height), (96, 32));
+        assert!(points_on_mesh_sheet(&sphere, &front, &[], 32).is_err());
     }
 
     #[test]

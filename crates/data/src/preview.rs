@@ -69,6 +69,7 @@ pub(crate) struct Projection {
     centre: [f64; 2],
     pixels_per_unit: f64,
     size: f64,
+    extent: f64,
 }
 
 impl Projection {
@@ -93,7 +94,13 @@ impl Projection {
             centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])],
             pixels_per_unit: 0.88 * size / extent,
             size,
+            extent,
         }
+    }
+
+    /// The larger side of the framed points' 2D bounding box (data units).
+    pub(crate) fn extent(&self) -> f64 {
+        self.extent
     }
 
     /// Pixel `x`, `y` (top row 0) and depth (larger is nearer) of `p`.
@@ -128,72 +135,107 @@ pub fn render_mesh(mesh: &TriMesh, size: u32, view: View, color: [f64; 3]) -> Re
         return Err(invalid("mesh", "empty", "nothing to render"));
     }
     let projection = Projection::fitted(mesh.vertices(), size, view);
-    let screen: Vec<V3> = mesh
-        .vertices()
-        .par_iter()
-        .map(|&p| projection.to_screen(p))
-        .collect();
-    let normals: Vec<V3> = vertex_normals(mesh)
-        .into_par_iter()
-        .map(|n| mul_v(&projection.rotation, to_f64(n)))
-        .collect();
-    let n = size as usize;
-    let mut depth = vec![f64::NEG_INFINITY; n * n];
-    let mut shade = vec![-1.0f64; n * n];
-    let light = normalize([-0.4, 0.5, 0.77]);
-    for tri in mesh.triangles() {
-        let [a, b, c] = tri.map(|v| v as usize);
-        let (Some(pa), Some(pb), Some(pc)) = (screen.get(a), screen.get(b), screen.get(c)) else {
-            continue;
-        };
-        let area = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
-        if area.abs() < 1e-12 {
-            continue;
+    let mut layer = Layer::new(size);
+    layer.draw_mesh(mesh, &projection, color);
+    Ok(layer.into_image())
+}
+
+/// A tile being drawn: per pixel the nearest depth so far and its colour (RGB in `[0, 1]`).
+pub(crate) struct Layer {
+    size: u32,
+    pub(crate) depth: Vec<f64>,
+    pub(crate) color: Vec<Option<[f64; 3]>>,
+}
+
+impl Layer {
+    /// An empty `size × size` tile.
+    pub(crate) fn new(size: u32) -> Self {
+        let n = size as usize;
+        Self {
+            size,
+            depth: vec![f64::NEG_INFINITY; n * n],
+            color: vec![None; n * n],
         }
-        let x0 = pa[0].min(pb[0]).min(pc[0]).floor().max(0.0) as usize;
-        let x1 = (pa[0].max(pb[0]).max(pc[0]).ceil() as usize).min(n.saturating_sub(1));
-        let y0 = pa[1].min(pb[1]).min(pc[1]).floor().max(0.0) as usize;
-        let y1 = (pa[1].max(pb[1]).max(pc[1]).ceil() as usize).min(n.saturating_sub(1));
-        let (na, nb, nc) = (normals[a], normals[b], normals[c]);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let (qx, qy) = (x as f64 + 0.5, y as f64 + 0.5);
-                let w0 = ((pb[0] - qx) * (pc[1] - qy) - (pb[1] - qy) * (pc[0] - qx)) / area;
-                let w1 = ((pc[0] - qx) * (pa[1] - qy) - (pc[1] - qy) * (pa[0] - qx)) / area;
-                let w2 = 1.0 - w0 - w1;
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                let z = w0 * pa[2] + w1 * pb[2] + w2 * pc[2];
-                let i = y * n + x;
-                if z > depth[i] {
-                    depth[i] = z;
-                    let nrm = normalize([
-                        w0 * na[0] + w1 * nb[0] + w2 * nc[0],
-                        w0 * na[1] + w1 * nb[1] + w2 * nc[1],
-                        w0 * na[2] + w1 * nb[2] + w2 * nc[2],
-                    ]);
-                    shade[i] = dot(nrm, light).abs();
+    }
+
+    /// Pixels per side.
+    pub(crate) fn side(&self) -> usize {
+        self.size as usize
+    }
+
+    /// Draws `mesh` through `projection` (z-buffered, two-sided Lambert shading of
+    /// interpolated vertex normals, light from the viewer's upper left, 25 % ambient, tinted
+    /// by `color`).
+    pub(crate) fn draw_mesh(&mut self, mesh: &TriMesh, projection: &Projection, color: [f64; 3]) {
+        let screen: Vec<V3> = mesh
+            .vertices()
+            .par_iter()
+            .map(|&p| projection.to_screen(p))
+            .collect();
+        let normals: Vec<V3> = vertex_normals(mesh)
+            .into_par_iter()
+            .map(|n| mul_v(&projection.rotation, to_f64(n)))
+            .collect();
+        let n = self.side();
+        let light = normalize([-0.4, 0.5, 0.77]);
+        for tri in mesh.triangles() {
+            let [a, b, c] = tri.map(|v| v as usize);
+            let (Some(pa), Some(pb), Some(pc)) = (screen.get(a), screen.get(b), screen.get(c))
+            else {
+                continue;
+            };
+            let area = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+            if area.abs() < 1e-12 {
+                continue;
+            }
+            let x0 = pa[0].min(pb[0]).min(pc[0]).floor().max(0.0) as usize;
+            let x1 = (pa[0].max(pb[0]).max(pc[0]).ceil() as usize).min(n.saturating_sub(1));
+            let y0 = pa[1].min(pb[1]).min(pc[1]).floor().max(0.0) as usize;
+            let y1 = (pa[1].max(pb[1]).max(pc[1]).ceil() as usize).min(n.saturating_sub(1));
+            let (na, nb, nc) = (normals[a], normals[b], normals[c]);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let (qx, qy) = (x as f64 + 0.5, y as f64 + 0.5);
+                    let w0 = ((pb[0] - qx) * (pc[1] - qy) - (pb[1] - qy) * (pc[0] - qx)) / area;
+                    let w1 = ((pc[0] - qx) * (pa[1] - qy) - (pc[1] - qy) * (pa[0] - qx)) / area;
+                    let w2 = 1.0 - w0 - w1;
+                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                        continue;
+                    }
+                    let z = w0 * pa[2] + w1 * pb[2] + w2 * pc[2];
+                    let i = y * n + x;
+                    if z > self.depth[i] {
+                        self.depth[i] = z;
+                        let nrm = normalize([
+                            w0 * na[0] + w1 * nb[0] + w2 * nc[0],
+                            w0 * na[1] + w1 * nb[1] + w2 * nc[1],
+                            w0 * na[2] + w1 * nb[2] + w2 * nc[2],
+                        ]);
+                        let lum = 0.25 + 0.75 * dot(nrm, light).abs();
+                        self.color[i] = Some(color.map(|c| lum * c));
+                    }
                 }
             }
         }
     }
-    let mut pixels = Vec::with_capacity(n * n * 3);
-    for &l in &shade {
-        if l < 0.0 {
-            pixels.extend_from_slice(&BACKGROUND);
-        } else {
-            let lum = 0.25 + 0.75 * l;
-            for c in color {
-                pixels.push((255.0 * (lum * c).clamp(0.0, 1.0)).round() as u8);
+
+    /// The finished tile: the background where nothing was drawn.
+    pub(crate) fn into_image(self) -> RgbImage {
+        let mut pixels = Vec::with_capacity(self.color.len() * 3);
+        for c in &self.color {
+            match c {
+                None => pixels.extend_from_slice(&BACKGROUND),
+                Some(c) => {
+                    pixels.extend(c.map(|v| (255.0 * v.clamp(0.0, 1.0)).round() as u8));
+                }
             }
         }
+        RgbImage {
+            width: self.size,
+            height: self.size,
+            pixels,
+        }
     }
-    Ok(RgbImage {
-        width: size,
-        height: size,
-        pixels,
-    })
 }
 
 /// A grid of `tile × tile` renders of `meshes`, `columns` per row (rendered in parallel).
