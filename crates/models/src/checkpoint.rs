@@ -303,6 +303,17 @@ pub(crate) fn lock(
     })
 }
 
+/// Sets to zero every variable of `vars` whose name starts with one of `prefixes` (a layer
+/// that must start silent, e.g. the learned half of a residual model).
+pub(crate) fn zero_vars(vars: &candle_nn::VarMap, prefixes: &[String]) -> Result<()> {
+    for (name, var) in lock(vars)?.iter() {
+        if prefixes.iter().any(|p| name.starts_with(p.as_str())) {
+            var.set(&var.zeros_like()?)?;
+        }
+    }
+    Ok(())
+}
+
 /// Sets every variable of `vars` from the tensor of the same name in `tensors`; errors name a
 /// missing tensor or one whose shape or type differs from the variable's.
 pub(crate) fn set_vars(vars: &candle_nn::VarMap, tensors: &HashMap<String, Tensor>) -> Result<()> {

@@ -16,7 +16,7 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 
-use crate::checkpoint::{checkpoint_of, lock, read_file, set_vars};
+use crate::checkpoint::{checkpoint_of, lock, read_file, set_vars, zero_vars};
 use crate::expression::{
     Blendshapes, DecoderKind, ExpressionGenerator, ExpressionGeneratorConfig, RESIDUAL_PREFIX,
 };
@@ -76,11 +76,7 @@ impl ExpressionModel {
         seeded_initialization(&model.vars, seed)?;
         if config.decoder == DecoderKind::Residual {
             let output = format!("{RESIDUAL_PREFIX}.{}.", SpiralDecoder::OUTPUT_LAYER);
-            for (name, var) in lock(&model.vars)?.iter() {
-                if name.starts_with(&output) {
-                    var.set(&var.zeros_like()?)?;
-                }
-            }
+            zero_vars(&model.vars, &[output])?;
         }
         Ok(model)
     }

@@ -78,6 +78,25 @@ fn check_sequences(
     validation.check("validation sequences", v)
 }
 
+/// The blendshapes a decoder of `config` needs: `given` when there are, else fitted on the
+/// training displacements; none for the spiral decoder.
+fn blendshapes_for(
+    config: &ExpressionGeneratorConfig,
+    template: &TriMesh,
+    train: &ExpressionSequences,
+    given: Option<&Blendshapes>,
+) -> Result<Option<Blendshapes>> {
+    Ok(match (config.decoder.uses_blendshapes(), given) {
+        (false, _) => None,
+        (true, Some(b)) => Some(b.clone()),
+        (true, None) => Some(Blendshapes::fit(
+            template,
+            &train.displacements(),
+            config.hidden_size,
+        )?),
+    })
+}
+
 /// An expression model with its training and validation sequences.
 pub struct ExpressionTraining {
     model: ExpressionModel,
@@ -120,14 +139,7 @@ impl ExpressionTraining {
         device: &Device,
     ) -> Result<Self> {
         check_sequences(template, train, validation)?;
-        let blendshapes = match config.decoder.uses_blendshapes() {
-            true => Some(Blendshapes::fit(
-                template,
-                &train.displacements(),
-                config.hidden_size,
-            )?),
-            false => None,
-        };
+        let blendshapes = blendshapes_for(config, template, train, None)?;
         let model = ExpressionModel::new(template, config, blendshapes, seed, device)?;
         Self::with_model(model, train, validation)
     }
@@ -146,15 +158,7 @@ impl ExpressionTraining {
     ) -> Result<(Self, usize)> {
         let template = init.template();
         check_sequences(template, train, validation)?;
-        let blendshapes = match (config.decoder.uses_blendshapes(), init.blendshapes()) {
-            (false, _) => None,
-            (true, Some(b)) => Some(b.clone()),
-            (true, None) => Some(Blendshapes::fit(
-                template,
-                &train.displacements(),
-                config.hidden_size,
-            )?),
-        };
+        let blendshapes = blendshapes_for(config, template, train, init.blendshapes())?;
         let model = ExpressionModel::new(template, config, blendshapes, seed, init.device())?;
         let taken = model.initialize_from(init, path)?;
         Ok((Self::with_model(model, train, validation)?, taken))

@@ -19,10 +19,10 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 
-use crate::checkpoint::{checkpoint_of, lock, set_vars};
+use crate::checkpoint::{checkpoint_of, lock, set_vars, zero_vars};
 use crate::handy::spiral::{
-    LinearSkip, SpiralAutoencoder, SpiralAutoencoderConfig, TemplateTensors, VertexNormalization,
-    seeded_initialization,
+    LinearSkip, SpiralAutoencoder, SpiralAutoencoderConfig, SpiralDecoder, TemplateTensors,
+    VertexNormalization, seeded_initialization,
 };
 use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, MorphableModel, Result};
 
@@ -83,11 +83,8 @@ impl SpiralMorphableModel {
         seeded_initialization(&model.vars, seed)?;
         if config.linear_skip {
             // the spiral halves' last maps start at zero: the fresh model is its PCA path
-            for (name, var) in lock(&model.vars)?.iter() {
-                if name.starts_with("encoder.latent.") || name.starts_with("decoder.conv0.") {
-                    var.set(&var.zeros_like()?)?;
-                }
-            }
+            let output = format!("decoder.{}.", SpiralDecoder::OUTPUT_LAYER);
+            zero_vars(&model.vars, &["encoder.latent.".to_string(), output])?;
         }
         Ok(model)
     }
