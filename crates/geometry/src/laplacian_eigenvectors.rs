@@ -8,12 +8,17 @@
 //! With `M` diagonal the problem is the symmetric `A y = λ y`, `A = M^{-1/2} L M^{-1/2}`,
 //! `x = M^{-1/2} y`. Shift-invert around a small negative shift `σ` turns the smallest `λ`
 //! into the largest `μ = 1/(λ − σ)` of `M^{1/2} (L − σM)^{-1} M^{1/2}`; block Lanczos with full
-//! re-orthogonalisation (block classical Gram-Schmidt, BLAS-3 through faer, a second pass
-//! only for a block that lost most of its norm) builds a Krylov basis, one sparse Cholesky
-//! factorisation of `L − σM` (faer, AMD fill-reducing ordering) serves every solve, and a
-//! dense symmetric eigen-solve of the small projected matrix gives Ritz pairs; the basis is
-//! extended until every wanted Ritz residual is below `1e-9 μ`. Memory is `#V × O(k)`, never
-//! `#V²`.
+//! re-orthogonalisation (block classical Gram-Schmidt, a second pass only for a block that
+//! lost most of its norm; each new block orthonormalised by Cholesky QR twice) builds a
+//! Krylov basis, one sparse Cholesky factorisation of `L − σM` (faer, AMD fill-reducing
+//! ordering) serves every solve, and a dense symmetric eigen-solve of the small projected
+//! matrix gives Ritz pairs; the basis is extended until every wanted Ritz residual is below
+//! `1e-9 μ`. Memory is `#V × O(k)`, never
+//! `#V²`. The dense products run on fixed blocks of rows and the solves on fixed groups of
+//! columns, in parallel, each sequential inside (`row_chunked_products`, `sparse_cholesky`):
+//! faer's finer-grained parallel kernels made the solver 2-3× slower than one thread on a
+//! 2-core machine (docs/geometry.md), and fixed blocks keep the result independent of the
+//! thread count.
 //!
 //! The null vector `M^{1/2}·1` (λ = 0) is known and locked at the start of the basis: the
 //! iteration then sees `μ` from `1/λ₁` down, instead of from `1/|σ| ≈ 1e8/λ-scale`, a range
@@ -33,9 +38,8 @@
 //! - Vertices with zero mass (unreferenced, or only in degenerate faces) are not part of the
 //!   surface: their rows are zero.
 
-use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Mat, MatRef, Side};
 use petgraph::unionfind::UnionFind;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -44,6 +48,8 @@ use crate::TriMesh;
 use crate::cotangent_laplacian::cotangent_laplacian;
 use crate::error::{Error, Result};
 use crate::mass_matrix::lumped_mass_matrix;
+use crate::row_chunked_products::{product, subtract_projection, transpose_product};
+use crate::sparse_cholesky::SparseCholesky;
 
 /// The first `k` generalised eigenpairs of the cotangent Laplacian.
 #[derive(Debug, Clone)]
@@ -213,9 +219,9 @@ fn component_eigenpairs(
             solver: "laplacian eigenvectors",
             message: format!("assembling L - σM: {e:?}"),
         })?;
-    let factor = matrix.sp_cholesky(Side::Lower).map_err(|e| Error::Solver {
+    let factor = SparseCholesky::new(matrix.as_ref()).map_err(|e| Error::Solver {
         solver: "laplacian eigenvectors",
-        message: format!("Cholesky factorisation of L - σM failed: {e:?}"),
+        message: format!("Cholesky factorisation of L - σM failed: {e}"),
     })?;
     // op(Y) = M^{1/2} (L − σM)^{-1} M^{1/2} Y, in place.
     let op = |mut y: Mat<f64>| -> Mat<f64> {
@@ -229,16 +235,13 @@ fn component_eigenpairs(
     // 1/|σ| ≈ 1e8 … (rounding along y₀ would be amplified by that range every step).
     let norm = sqrt_mass.iter().map(|m| m * m).sum::<f64>().sqrt();
     let null = faer::Col::<f64>::from_fn(n, |i| sqrt_mass[i] / norm);
-    let (mu, lanczos_vectors) = match want {
-        1 => (Vec::new(), Mat::<f64>::zeros(n, 0)),
+    let (mu, vectors) = match want {
+        1 => (Vec::new(), null.as_mat().to_owned()),
         _ => block_lanczos(n, want - 1, null.as_ref(), op)?,
     };
     let values = std::iter::once(0.0)
         .chain(mu.iter().map(|&m| sigma + 1.0 / m))
         .collect();
-    let mut vectors = Mat::<f64>::zeros(n, want);
-    vectors.col_mut(0).copy_from(&null);
-    vectors.subcols_mut(1, want - 1).copy_from(&lanczos_vectors);
     Ok((values, vectors))
 }
 
@@ -274,9 +277,9 @@ fn dense_eigenpairs(
     Ok((values, vectors))
 }
 
-/// The `want` largest eigenpairs `(μ descending, vectors n×want)` of the symmetric positive
-/// definite operator `op` restricted to the complement of its unit eigenvector `locked`, by
-/// block Lanczos with full re-orthogonalisation.
+/// The `want` largest eigenpairs `(μ descending, vectors)` of the symmetric positive definite
+/// operator `op` restricted to the complement of its unit eigenvector `locked`, by block
+/// Lanczos with full re-orthogonalisation; `vectors` is `n×(want + 1)`, `locked` first.
 fn block_lanczos(
     n: usize,
     want: usize,
@@ -285,7 +288,9 @@ fn block_lanczos(
 ) -> Result<(Vec<f64>, Mat<f64>)> {
     let block = want.clamp(1, MAX_BLOCK);
     let capacity = n.min(4 * want + 8 * block + 64);
-    let mut basis = Mat::<f64>::zeros(n, capacity);
+    // Grown block by block: only the columns used are ever touched.
+    let mut basis = Mat::<f64>::with_capacity(n, capacity);
+    basis.resize_with(n, 1, |_, _| 0.0);
     let mut projected = Mat::<f64>::zeros(capacity, capacity);
     let mut rng = StdRng::seed_from_u64(0x5eed_1a9c);
     let mut next = Mat::<f64>::from_fn(n, block, |_, _| rng.random_range(-1.0..1.0));
@@ -297,7 +302,7 @@ fn block_lanczos(
         next -= locked.as_mat() * c.as_mat();
     }
     let (v0, _) = orthonormalize(&mut next, basis.subcols(0, 1), n - 1, &mut rng);
-    basis.subcols_mut(1, v0.ncols()).copy_from(&v0);
+    append_columns(&mut basis, &v0);
     let mut size = 1 + v0.ncols();
     let mut current = (1, v0.ncols());
     // Ritz checks cost O(size³): start once the basis can hold the wanted pairs plus a block,
@@ -312,9 +317,7 @@ fn block_lanczos(
         let mut coefficients = Mat::<f64>::zeros(size, width);
         let before = column_norms(&w);
         for pass in 0..2 {
-            let c = q.transpose() * &w;
-            faer::linalg::matmul::matmul(w.as_mut(), Accum::Add, q, &c, -1.0, Par::rayon(0));
-            coefficients += &c;
+            coefficients += subtract_projection(q, w.as_mut());
             let after = column_norms(&w);
             let kept = before
                 .iter()
@@ -348,11 +351,13 @@ fn block_lanczos(
                 (&r * tail).norm_l2() <= TOLERANCE * theta[i].abs()
             });
             if converged || fresh.ncols() == 0 {
-                let mut selected = Mat::<f64>::zeros(size, want);
+                // Column 0 of the result is `locked` itself: e₀ in the basis' coordinates.
+                let mut selected = Mat::<f64>::zeros(size, want + 1);
+                selected[(0, 0)] = 1.0;
                 for i in 0..want {
-                    selected.col_mut(i).copy_from(s.col(size - 1 - i));
+                    selected.col_mut(i + 1).copy_from(s.col(size - 1 - i));
                 }
-                let vectors = basis.subcols(0, size) * &selected;
+                let vectors = product(basis.subcols(0, size), selected.as_ref());
                 return Ok((theta[..want].to_vec(), vectors));
             }
             if size + fresh.ncols() > capacity {
@@ -367,10 +372,16 @@ fn block_lanczos(
         projected
             .submatrix_mut(size, start, r.nrows(), width)
             .copy_from(&r);
-        basis.subcols_mut(size, fresh.ncols()).copy_from(&fresh);
+        append_columns(&mut basis, &fresh);
         current = (size, fresh.ncols());
         size += fresh.ncols();
     }
+}
+
+/// Appends the columns of `new` to `basis` (within its reserved capacity).
+fn append_columns(basis: &mut Mat<f64>, new: &Mat<f64>) {
+    let old = basis.ncols();
+    basis.resize_with(basis.nrows(), old + new.ncols(), |i, j| new[(i, j - old)]);
 }
 
 /// The Euclidean norm of every column of `w`.
@@ -383,19 +394,69 @@ fn symmetrized(h: MatRef<'_, f64>) -> Mat<f64> {
     Mat::from_fn(h.nrows(), h.ncols(), |i, j| 0.5 * (h[(i, j)] + h[(j, i)]))
 }
 
-/// Modified Gram-Schmidt (twice) of `w` against `q` and itself, keeping `room` columns:
-/// returns `(V, R)` with `W ≈ V R` for the kept part. A column that is numerically dependent
-/// is replaced by a random vector orthogonal to everything (its row of `R` is zero), so the
-/// block keeps its width through invariant subspaces.
+/// Orthonormalises the columns of `w` (already orthogonal to `q`), keeping `room` columns:
+/// returns `(V, R)` with `W ≈ V R` for the kept part. Cholesky QR twice when `W` is well
+/// conditioned (BLAS-3, split by rows over the threads); otherwise modified Gram-Schmidt
+/// twice, where a column that is numerically dependent is replaced by a random vector
+/// orthogonal to everything (its row of `R` is zero), so the block keeps its width through
+/// invariant subspaces.
 fn orthonormalize(
     w: &mut Mat<f64>,
     q: MatRef<'_, f64>,
     room: usize,
     rng: &mut StdRng,
 ) -> (Mat<f64>, Mat<f64>) {
+    let kept = room.min(w.ncols()).min(w.nrows().saturating_sub(q.ncols()));
+    if kept == w.ncols()
+        && let Some(qr) = cholesky_qr2(w)
+    {
+        return qr;
+    }
+    gram_schmidt(w, q, kept, rng)
+}
+
+/// CholQR2 (Fukaya et al., 2014): `R₁ᵀR₁ = WᵀW`, `V₁ = W R₁⁻¹`, the same again on `V₁`, and
+/// `R = R₂ R₁`; orthogonal to rounding while `cond(W)` stays well below `ε^{-1/2} ≈ 10⁸`.
+/// `None` when `W` may not be (a Cholesky fails, a diagonal of `R₁` or `R₂` is below 1e-5 of
+/// the largest, or `V` is not orthonormal to 1e-12 at the end).
+fn cholesky_qr2(w: &Mat<f64>) -> Option<(Mat<f64>, Mat<f64>)> {
+    let width = w.ncols();
+    let mut v = w.clone();
+    let mut r = Mat::<f64>::identity(width, width);
+    for _ in 0..2 {
+        let gram = transpose_product(v.as_ref(), v.as_ref());
+        let factor = gram.llt(Side::Lower).ok()?;
+        let upper = factor.L().transpose().to_owned();
+        let diagonal = (0..width).map(|i| upper[(i, i)]);
+        let (low, high) = diagonal.fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        });
+        if low.is_nan() || low <= 1e-5 * high {
+            return None;
+        }
+        let mut inverse = Mat::<f64>::zeros(width, width);
+        faer::linalg::triangular_inverse::invert_upper_triangular(
+            inverse.as_mut(),
+            upper.as_ref(),
+            faer::Par::Seq,
+        );
+        v = product(v.as_ref(), inverse.as_ref());
+        r = &upper * &r;
+    }
+    let gram = transpose_product(v.as_ref(), v.as_ref());
+    let error = (&gram - Mat::<f64>::identity(width, width)).norm_max();
+    (error <= 1e-12).then_some((v, r))
+}
+
+/// Modified Gram-Schmidt, twice, keeping `kept` columns; see [`orthonormalize`].
+fn gram_schmidt(
+    w: &mut Mat<f64>,
+    q: MatRef<'_, f64>,
+    kept: usize,
+    rng: &mut StdRng,
+) -> (Mat<f64>, Mat<f64>) {
     let n = w.nrows();
     let width = w.ncols();
-    let kept = room.min(width).min(n.saturating_sub(q.ncols()));
     let mut v = Mat::<f64>::zeros(n, kept);
     let mut r = Mat::<f64>::zeros(kept, width);
     let mut filled = 0usize;
@@ -570,8 +631,30 @@ mod tests {
     }
 
     #[test]
+    fn cholesky_qr_is_used_when_well_conditioned_and_gram_schmidt_otherwise() {
+        let mut rng = StdRng::seed_from_u64(7);
+        let none = Mat::<f64>::zeros(5000, 0);
+        let mut w = Mat::<f64>::from_fn(5000, 6, |_, _| rng.random_range(-1.0..1.0));
+        let (v, r) = cholesky_qr2(&w).expect("a random block is well conditioned");
+        let identity = Mat::<f64>::identity(6, 6);
+        assert!((v.transpose() * &v - &identity).norm_max() < 1e-13);
+        assert!((&v * &r - &w).norm_max() < 1e-12);
+        assert!((0..6).all(|j| (j + 1..6).all(|i| r[(i, j)] == 0.0) && r[(j, j)] > 0.0));
+        // Column 5 equal to column 4 up to 1e-12: CholQR refuses, Gram-Schmidt replaces it.
+        for i in 0..5000 {
+            w[(i, 5)] = w[(i, 4)] * (1.0 + 1e-12);
+        }
+        assert!(cholesky_qr2(&w).is_none());
+        let (v, r) = orthonormalize(&mut w.clone(), none.as_ref(), 6, &mut rng);
+        assert!((v.transpose() * &v - &identity).norm_max() < 1e-12);
+        assert!(r[(5, 5)].abs() < 1e-8 * r[(4, 4)]);
+        assert!((&v * &r - &w).norm_max() < 1e-9);
+    }
+
+    #[test]
     fn same_result_for_any_thread_count() {
-        let mesh = icosphere(3);
+        // 10 242 vertices: several row blocks of the parallel products.
+        let mesh = icosphere(5);
         let reference = laplacian_eigenvectors(&mesh, 20).unwrap();
         for threads in [1, 3] {
             let pool = rayon::ThreadPoolBuilder::new()

@@ -18,6 +18,8 @@ mod error;
 mod io;
 mod point_cloud;
 mod primitives;
+mod row_chunked_products;
+mod sparse_cholesky;
 mod tri_mesh;
 pub mod vec3;
 
