@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use meshgnn_data::{View, points_on_mesh_sheet, write_png};
-use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_input_point_cloud, write_mesh};
+use meshgnn_geometry::{
+    OutputGuard, TriMesh, bounding_box_diagonal, check_count, read_input_point_cloud, write_mesh,
+};
 use meshgnn_models::{ChamferDirection, MAX_FIT_STEPS, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;
 
@@ -97,12 +99,16 @@ pub fn run(args: &FitArgs) -> Result<()> {
             &points_on_mesh_sheet(&mesh, scan.points(), &views, PREVIEW_TILE)?,
         )?;
     }
+    // The scan's own size: R2S and S2R relative to it compare scans in any unit.
+    let diagonal = bounding_box_diagonal(scan.points());
     if args.json {
         println!(
             "{}",
             json!({
                 "r2s_mm": fit.distances.r2s,
                 "s2r_mm": fit.distances.s2r,
+                "r2s_relative": fit.distances.r2s / diagonal,
+                "s2r_relative": fit.distances.s2r / diagonal,
                 "scan_points": scan.len(),
                 "latent": fit.latent,
                 "scale": fit.transform.scale,

@@ -40,8 +40,8 @@ fn write_hands(root: &Path, count: usize) {
         count,
         seed: 3,
         subdivisions: 1,
-        children_fraction: 0.2,
-        test_fraction: 0.2,
+        children_fraction: 0.3,
+        test_fraction: 0.4,
         ..Default::default()
     };
     let template = HandTemplate::new(1).unwrap();
@@ -255,6 +255,9 @@ fn fit_recovers_a_scan_of_a_test_hand() {
     assert!(r["preview"].as_str().unwrap().ends_with("fit.png"), "{r}");
     let (r2s, s2r) = (r["r2s_mm"].as_f64().unwrap(), r["s2r_mm"].as_f64().unwrap());
     assert!(r2s > 0.0 && r2s < 30.0 && s2r > 0.0 && s2r < 30.0, "{r}");
+    let diagonal = meshgnn_geometry::bounding_box_diagonal(hand.vertices());
+    let relative = r["r2s_relative"].as_f64().unwrap();
+    assert!((relative - r2s / diagonal).abs() < 1e-9, "{r}");
     assert_eq!(
         read_mesh(&fitted).unwrap().vertex_count(),
         hand.vertex_count()

@@ -113,15 +113,21 @@ fn articulation_makes_the_shape_space_non_linear() {
 }
 
 #[test]
-fn children_split_holds_only_children() {
+fn children_split_holds_only_children_and_training_holds_some() {
     let t = HandTemplate::new(1).unwrap();
     let c = HandSetConfig {
         children_fraction: 0.5,
+        test_fraction: 0.3,
         ..cfg(1, true)
     };
-    let samples: Vec<_> = (0..40).map(|i| c.sample(&t, i).unwrap()).collect();
-    assert!(samples.iter().any(|s| s.split == "children"));
-    for s in &samples {
-        assert_eq!(s.split == "children", s.shape.age < meshgnn_data::CHILD_AGE);
+    let samples: Vec<_> = (0..60).map(|i| c.sample(&t, i).unwrap()).collect();
+    let child = |s: &meshgnn_data::HandSample| s.shape.age < meshgnn_data::CHILD_AGE;
+    for split in ["children", "test", "train"] {
+        assert!(samples.iter().any(|s| s.split == split), "no {split}");
+    }
+    assert!(samples.iter().any(|s| s.split == "train" && child(s)));
+    assert!(samples.iter().any(|s| s.split == "train" && !child(s)));
+    for s in samples.iter().filter(|s| s.split != "train") {
+        assert_eq!(s.split == "children", child(s));
     }
 }

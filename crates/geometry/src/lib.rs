@@ -24,6 +24,7 @@ mod tri_mesh;
 pub mod vec3;
 
 mod boundary_loops;
+mod bounding_box;
 mod connected_components;
 mod cotangent_laplacian;
 mod count_bounds;
@@ -65,6 +66,7 @@ pub use primitives::{grid_plane, icosphere, subdivided_cube};
 pub use tri_mesh::TriMesh;
 
 pub use boundary_loops::boundary_loops;
+pub use bounding_box::{bounding_box, bounding_box_diagonal};
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use cotangent_laplacian::cotangent_laplacian;
 pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};

@@ -3,6 +3,7 @@
 
 use crate::TriMesh;
 use crate::boundary_loops::boundary_loops_in;
+use crate::bounding_box::bounding_box;
 use crate::connected_components::connected_components;
 use crate::degenerate_faces::degenerate_faces;
 use crate::duplicate_faces::duplicate_faces;
@@ -57,19 +58,7 @@ pub struct MeshReport {
 /// ```
 pub fn mesh_report(mesh: &TriMesh) -> MeshReport {
     let topology = edge_topology(mesh);
-    let (bbox_min, bbox_max) = if mesh.vertices().is_empty() {
-        ([0.0; 3], [0.0; 3])
-    } else {
-        mesh.vertices().iter().fold(
-            ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
-            |(lo, hi), p| {
-                (
-                    [0, 1, 2].map(|i| lo[i].min(p[i])),
-                    [0, 1, 2].map(|i| hi[i].max(p[i])),
-                )
-            },
-        )
-    };
+    let (bbox_min, bbox_max) = bounding_box(mesh.vertices()).unwrap_or(([0.0; 3], [0.0; 3]));
     MeshReport {
         vertices: mesh.vertex_count(),
         faces: mesh.face_count(),

@@ -221,19 +221,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let (ab_max, ab_mean, ab_squared) = one_sided(&a, &b)?;
     let (ba_max, ba_mean, ba_squared) = one_sided(&b, &a)?;
-    let (lo, hi) = mesh
-        .vertices()
-        .iter()
-        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
-            (
-                std::array::from_fn(|k| lo[k].min(p[k])),
-                std::array::from_fn(|k| hi[k].max(p[k])),
-            )
-        });
-    let diag = (0..3)
-        .map(|k| f64::from(hi[k] - lo[k]).powi(2))
-        .sum::<f64>()
-        .sqrt();
+    let diag = meshgnn_geometry::bounding_box_diagonal(mesh.vertices());
     println!(
         "{{\"method\": \"{method}\", \"input_faces\": {}, \"output_faces\": {}, \"seconds\": {seconds:.4}, \"hausdorff_rel\": {:.3e}, \"chamfer_rel\": {:.3e}, \"mean_squared_rel\": {:.3e}}}",
         mesh.face_count(),
