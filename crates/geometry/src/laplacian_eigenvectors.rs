@@ -266,40 +266,15 @@ fn dense_eigenpairs(
     for t in entries {
         a[(t.row, t.col)] += t.val / (sqrt_mass[t.row] * sqrt_mass[t.col]);
     }
-    let (mut values, vectors) = symmetric_eigen(a.as_ref(), "dense")?;
-    values.truncate(want);
-    Ok((values, vectors.subcols(0, want).to_owned()))
-}
-
-/// All eigenpairs `(values ascending, vectors)` of the symmetric `a` (lower triangle read), on
-/// the calling thread: faer's parallel path was slower on a shared 2-core machine (see the
-/// module docs). `what` names the solve in the error.
-fn symmetric_eigen(a: MatRef<'_, f64>, what: &str) -> Result<(Vec<f64>, Mat<f64>)> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
-    let n = a.nrows();
-    let mut values = faer::diag::Diag::<f64>::zeros(n);
-    let mut vectors = Mat::<f64>::zeros(n, n);
-    let par = faer::Par::Seq;
-    let mut scratch = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
-        n,
-        ComputeEigenvectors::Yes,
-        par,
-        Default::default(),
-    ));
-    self_adjoint_evd(
-        a,
-        values.as_mut(),
-        Some(vectors.as_mut()),
-        par,
-        MemStack::new(&mut scratch),
-        Default::default(),
-    )
-    .map_err(|e| Error::Solver {
-        solver: "laplacian eigenvectors",
-        message: format!("{what} eigen-solve did not converge: {e:?}"),
-    })?;
-    Ok(((0..n).map(|i| values[i]).collect(), vectors))
+    let eigen = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::Solver {
+            solver: "laplacian eigenvectors",
+            message: format!("dense eigen-solve did not converge: {e:?}"),
+        })?;
+    let values = (0..want).map(|i| eigen.S()[i]).collect();
+    let vectors = eigen.U().subcols(0, want).to_owned();
+    Ok((values, vectors))
 }
 
 /// The `want` largest eigenpairs `(μ descending, vectors)` of the symmetric positive definite
@@ -362,9 +337,15 @@ fn block_lanczos(
         if size >= next_check || fresh.ncols() == 0 || size + fresh.ncols() > capacity {
             next_check = size + block.max(size / 8);
             let h = symmetrized(projected.submatrix(0, 0, size, size));
-            let (ascending, s) = symmetric_eigen(h.as_ref(), "projected")?;
+            let eigen = h
+                .self_adjoint_eigen(Side::Lower)
+                .map_err(|e| Error::Solver {
+                    solver: "laplacian eigenvectors",
+                    message: format!("projected eigen-solve did not converge: {e:?}"),
+                })?;
+            let s = eigen.U();
             // Ritz values descending; the residual of Ritz pair i is |R s_i(last block)|.
-            let theta: Vec<f64> = ascending.iter().rev().copied().collect();
+            let theta: Vec<f64> = (0..size).map(|i| eigen.S()[size - 1 - i]).collect();
             let converged = (0..want).all(|i| {
                 let tail = s.col(size - 1 - i).subrows(start, width);
                 (&r * tail).norm_l2() <= TOLERANCE * theta[i].abs()
