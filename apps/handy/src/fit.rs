@@ -40,6 +40,11 @@ pub struct FitArgs {
     /// against model vertices facing it (for one-sided scans).
     #[arg(long, value_parser = crate::eval::parse_direction)]
     pub camera: Option<[f32; 3]>,
+    /// The scan is already in the model's orientation and handedness: skip the global start
+    /// (by default five orientations, each on the scan and its mirror image, are tried first:
+    /// see `meshgnn_models::ScanFitOptions::global_init`; about 3× the time).
+    #[arg(long)]
+    pub aligned: bool,
     /// Seed of the scan subsampling.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -80,6 +85,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
         estimate_scale: args.estimate_scale,
         seed: args.seed,
         view_direction: args.camera,
+        global_init: !args.aligned,
         ..Default::default()
     };
     let fit = fit_scan(
@@ -89,7 +95,17 @@ pub fn run(args: &FitArgs) -> Result<()> {
         &options,
     )
     .with_context(|| format!("fitting {}", args.scan.display()))?;
-    let mesh = TriMesh::new(fit.vertices, loaded.model.template().triangles().to_vec())?;
+    // A mirrored fit (a left hand for a right-hand model) keeps its vertices in the scan's
+    // frame; its triangles are flipped so that they face out again.
+    let triangles = loaded
+        .model
+        .template()
+        .triangles()
+        .iter()
+        .map(|&[a, b, c]| if fit.mirrored { [a, c, b] } else { [a, b, c] })
+        .collect();
+    let mirrored = fit.mirrored;
+    let mesh = TriMesh::new(fit.vertices, triangles)?;
     write_mesh(&args.output, &mesh)
         .with_context(|| format!("writing {}", args.output.display()))?;
     if let Some(p) = &args.preview {
@@ -110,6 +126,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
                 "r2s_relative": fit.distances.r2s / diagonal,
                 "s2r_relative": fit.distances.s2r / diagonal,
                 "scan_points": scan.len(),
+                "mirrored": mirrored,
                 "latent": fit.latent,
                 "scale": fit.transform.scale,
                 "rotation_wxyz": fit.transform.rotation,

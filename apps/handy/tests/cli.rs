@@ -258,6 +258,7 @@ fn fit_recovers_a_scan_of_a_test_hand() {
     let diagonal = meshgnn_geometry::bounding_box_diagonal(hand.vertices());
     let relative = r["r2s_relative"].as_f64().unwrap();
     assert!((relative - r2s / diagonal).abs() < 1e-9, "{r}");
+    assert_eq!(r["mirrored"], Value::Bool(false), "{r}");
     assert_eq!(
         read_mesh(&fitted).unwrap().vertex_count(),
         hand.vertex_count()

@@ -14,6 +14,7 @@ mod partial_scan;
 mod pca;
 mod scan_distances;
 mod scan_fitting;
+mod scan_orientation;
 mod shape_batches;
 pub mod spiral;
 

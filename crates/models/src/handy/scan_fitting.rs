@@ -27,6 +27,7 @@ use crate::handy::latent_gaussian::LatentGaussian;
 use crate::handy::morphable_evaluation::rms_radius;
 use crate::handy::morphable_model::MorphableModel;
 use crate::handy::scan_distances::{ScanDistances, scan_distances};
+use crate::handy::scan_orientation::starting_rotations;
 use crate::tensor_file::{flatten_points, unflatten_points};
 use crate::{Error, Result};
 
@@ -65,6 +66,12 @@ pub struct ScanFitOptions {
     /// model's visible vertices. Without it a one-sided scan can settle *between* the model's
     /// front and back surfaces.
     pub view_direction: Option<[f32; 3]>,
+    /// For scans in any orientation and handedness (beyond the thesis, whose scans are
+    /// aligned): starts from the identity and from the four rotations that align the model's
+    /// principal axes with the scan's, each on the scan and on its mirror image (a left hand
+    /// for a right-hand model); every start runs a fifth of the steps, and the one with the
+    /// lowest loss is fitted again with all of them.
+    pub global_init: bool,
 }
 
 impl Default for ScanFitOptions {
@@ -79,6 +86,7 @@ impl Default for ScanFitOptions {
             estimate_scale: false,
             seed: 0,
             view_direction: None,
+            global_init: false,
         }
     }
 }
@@ -198,6 +206,10 @@ pub struct ScanFit {
     pub distances: ScanDistances,
     /// Final value of the (dimensionless) loss.
     pub loss: f64,
+    /// Whether the scan was mirrored (`x → −x`) to match the model: `vertices` are mirrored
+    /// back into the scan's frame (so the template's triangles face inwards: flip them), while
+    /// `latent` and `transform` describe the fit to the mirrored scan.
+    pub mirrored: bool,
 }
 
 fn invalid(what: &str, reason: impl Into<String>) -> Error {
@@ -306,6 +318,67 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     prior: Option<&LatentGaussian>,
     options: &ScanFitOptions,
 ) -> Result<ScanFit> {
+    const IDENTITY: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
+    if !options.global_init {
+        return fit_from(model, scan, prior, options, IDENTITY);
+    }
+    let mirror = |points: &[[f32; 3]]| -> Vec<[f32; 3]> {
+        points.iter().map(|p| [-p[0], p[1], p[2]]).collect()
+    };
+    let mirrored_scan = mirror(scan);
+    let (_, mean) = mean_shape(model, prior)?;
+    let screening = ScanFitOptions {
+        steps: (options.steps / 5).max(1),
+        ..*options
+    };
+    let mut best: Option<(f64, bool, [f64; 4])> = None;
+    for (mirrored, points) in [(false, scan), (true, &mirrored_scan[..])] {
+        for start in starting_rotations(&mean, points) {
+            let loss = fit_from(model, points, prior, &screening, start)?.loss;
+            if best.is_none_or(|(lowest, ..)| loss < lowest) {
+                best = Some((loss, mirrored, start));
+            }
+        }
+    }
+    let (_, mirrored, start) = best.unwrap_or((0.0, false, IDENTITY));
+    if !mirrored {
+        return fit_from(model, scan, prior, options, start);
+    }
+    let fit = fit_from(model, &mirrored_scan, prior, options, start)?;
+    Ok(ScanFit {
+        vertices: mirror(&fit.vertices),
+        mirrored: true,
+        ..fit
+    })
+}
+
+/// The latent code the fit starts from (zero, or the prior's mean) and its decoded shape.
+fn mean_shape<M: MorphableModel + ?Sized>(
+    model: &M,
+    prior: Option<&LatentGaussian>,
+) -> Result<(Vec<f32>, Vec<[f32; 3]>)> {
+    let z_size = model.latent_size();
+    let z0: Vec<f32> = prior.map_or(vec![0.0; z_size], |p| {
+        p.mean().iter().map(|&m| m as f32).collect()
+    });
+    let shape = unflatten_points(
+        &model
+            .decode(&Tensor::from_vec(z0.clone(), (1, z_size), &Device::Cpu)?)?
+            .to_dtype(DType::F32)?
+            .flatten_all()?
+            .to_vec1::<f32>()?,
+    );
+    Ok((z0, shape))
+}
+
+/// One fit from the rotation `start` (a unit quaternion); see [`fit_scan`].
+fn fit_from<M: MorphableModel + ?Sized>(
+    model: &M,
+    scan: &[[f32; 3]],
+    prior: Option<&LatentGaussian>,
+    options: &ScanFitOptions,
+    start: [f64; 4],
+) -> Result<ScanFit> {
     if scan.len() < 3 {
         return Err(invalid(
             "scan",
@@ -338,16 +411,7 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
         ));
     }
     let dev = Device::Cpu;
-    let z0: Vec<f32> = prior.map_or(vec![0.0; z_size], |p| {
-        p.mean().iter().map(|&m| m as f32).collect()
-    });
-    let mean_shape = unflatten_points(
-        &model
-            .decode(&Tensor::from_vec(z0.clone(), (1, z_size), &dev)?)?
-            .to_dtype(DType::F32)?
-            .flatten_all()?
-            .to_vec1::<f32>()?,
-    );
+    let (z0, mean_shape) = mean_shape(model, prior)?;
     let c = centroid(&mean_shape);
     let model_radius = rms_radius(&mean_shape);
     let scan_radius = rms_radius(scan);
@@ -364,11 +428,23 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     };
     let triangles = model.template().triangles();
     let t0 = match options.view_direction {
-        // scan centroid minus the offset of the visible part's centroid from the model's
+        // scan centroid minus the offset of the visible part's centroid from the model's, with
+        // the mean shape turned to the start
         Some(d) => {
-            let visible: Vec<[f32; 3]> = facing_vertices(&mean_shape, triangles, d)?
+            let turn = SimilarityTransform {
+                rotation: start,
+                ..SimilarityTransform::IDENTITY
+            };
+            let turned: Vec<[f32; 3]> = mean_shape
                 .iter()
-                .filter_map(|&i| mean_shape.get(i as usize).copied())
+                .map(|p| {
+                    let q = turn.apply(std::array::from_fn(|k| (f64::from(p[k]) - c[k]) as f32));
+                    std::array::from_fn(|k| (f64::from(q[k]) + c[k]) as f32)
+                })
+                .collect();
+            let visible: Vec<[f32; 3]> = facing_vertices(&turned, triangles, d)?
+                .iter()
+                .filter_map(|&i| turned.get(i as usize).copied())
                 .collect();
             let cv = centroid(&visible);
             let cs = centroid(scan);
@@ -389,7 +465,7 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     let scan_t = Tensor::from_vec(flatten_points(&sub), (sub.len(), 3), &dev)?;
 
     let z = Var::from_tensor(&Tensor::from_vec(z0, (1, z_size), &dev)?)?;
-    let q = Var::from_tensor(&Tensor::new(&[1f32, 0.0, 0.0, 0.0], &dev)?)?;
+    let q = Var::from_tensor(&Tensor::new(&start.map(|x| x as f32), &dev)?)?;
     let log_s = Var::from_tensor(&Tensor::zeros(1, DType::F32, &dev)?)?;
     let tau = Var::from_tensor(&Tensor::zeros((1, 3), DType::F32, &dev)?)?;
     let mut vars = vec![
@@ -514,6 +590,7 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
         transform,
         distances,
         loss: final_loss,
+        mirrored: false,
     })
 }
 
@@ -608,6 +685,45 @@ mod tests {
             assert!(err < 0.01, "{err}");
             assert!(fit.distances.r2s < 0.01 && fit.distances.s2r < 0.01);
         }
+    }
+
+    #[test]
+    fn global_init_recovers_a_turned_and_mirrored_scan() {
+        let pca = model();
+        let x = crate::handy::shape_batches::decode_latents(&pca, &[vec![0.5, -0.4, 0.3]]).unwrap();
+        let turn = SimilarityTransform::from_axis_angle(
+            1.0,
+            [1.0, -2.0, 0.5],
+            140f64.to_radians(),
+            [0.3, 0.1, -0.2],
+        );
+        // the mirror image of a turned shape: a "left hand" in an unknown orientation
+        let scan: Vec<[f32; 3]> = x[0]
+            .iter()
+            .map(|&p| {
+                let q = turn.apply(p);
+                [-q[0], q[1], q[2]]
+            })
+            .collect();
+        let opts = ScanFitOptions {
+            steps: 400,
+            ..Default::default()
+        };
+        let plain = fit_scan(&pca, &scan, None, &opts).unwrap();
+        let global = ScanFitOptions {
+            global_init: true,
+            ..opts
+        };
+        let fit = fit_scan(&pca, &scan, None, &global).unwrap();
+        assert!(fit.mirrored && !plain.mirrored);
+        let err = meshgnn_losses::metrics::per_vertex_error(&fit.vertices, &scan).unwrap();
+        assert!(err < 0.02, "per-vertex error {err}");
+        assert!(
+            plain.distances.s2r > 5.0 * fit.distances.s2r,
+            "without the global start {:?}, with it {:?}",
+            plain.distances,
+            fit.distances
+        );
     }
 
     #[test]
