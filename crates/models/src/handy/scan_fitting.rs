@@ -326,13 +326,21 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
         points.iter().map(|p| [-p[0], p[1], p[2]]).collect()
     };
     let mirrored_scan = mirror(scan);
-    let (_, mean) = mean_shape(model, prior)?;
-    let screening = ScanFitOptions {
-        steps: (options.steps / 5).max(1),
+    // The mirror image of a one-sided scan was seen from the mirrored camera.
+    let mirrored_options = ScanFitOptions {
+        view_direction: options.view_direction.map(|d| [-d[0], d[1], d[2]]),
         ..*options
     };
+    let (_, mean) = mean_shape(model, prior)?;
     let mut best: Option<(f64, bool, [f64; 4])> = None;
-    for (mirrored, points) in [(false, scan), (true, &mirrored_scan[..])] {
+    for (mirrored, points, opts) in [
+        (false, scan, options),
+        (true, &mirrored_scan[..], &mirrored_options),
+    ] {
+        let screening = ScanFitOptions {
+            steps: (options.steps / 5).max(1),
+            ..*opts
+        };
         for start in starting_rotations(&mean, points) {
             let loss = fit_from(model, points, prior, &screening, start)?.loss;
             if best.is_none_or(|(lowest, ..)| loss < lowest) {
@@ -344,7 +352,7 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     if !mirrored {
         return fit_from(model, scan, prior, options, start);
     }
-    let fit = fit_from(model, &mirrored_scan, prior, options, start)?;
+    let fit = fit_from(model, &mirrored_scan, prior, &mirrored_options, start)?;
     Ok(ScanFit {
         vertices: mirror(&fit.vertices),
         mirrored: true,
