@@ -16,11 +16,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_data::FolderDataset;
+use meshgnn_data::{FolderDataset, gaussian_noise};
 use meshgnn_geometry::{OutputGuard, check_count, sample_surface};
 use meshgnn_models::point_simplifier::{
-    PointSimplifierConfig, SimplifierObjective, SimplifierTraining, TrainingSample,
-    prepare_training_sample,
+    PointSimplifierConfig, SelectorSpace, SimplifierObjective, SimplifierTraining, TrainingSample,
+    prepare_denoising_sample,
 };
 use meshgnn_models::training::{Trainable, TrainingConfig, train};
 use meshgnn_models::{MAX_CLOUDS_PER_SHAPE, MAX_EPOCHS, MAX_TRAINING_CLOUD_POINTS};
@@ -61,6 +61,14 @@ pub struct TrainArgs {
     /// Temperature τ of the adaptive Chamfer weights (eq. 5.7).
     #[arg(long, default_value_t = 10.0)]
     pub tau: f32,
+    /// Gaussian noise levels σ of the training inputs, as fractions of the bounding-sphere
+    /// radius (comma separated): cloud c of each shape reads level c mod count, the loss
+    /// compares with the clean cloud (training the refinement to denoise).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0])]
+    pub noise: Vec<f64>,
+    /// Space of the selector's FPS: `latent` (the thesis) or `position` (stored in the weights).
+    #[arg(long, value_enum, default_value_t = SelectorSpace::Latent)]
+    pub selector: SelectorSpace,
     /// Shapes held out of training to pick the best epoch (0: keep the last epoch).
     #[arg(long, default_value_t = 4)]
     pub validation_shapes: usize,
@@ -101,6 +109,9 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             bail!("{name} {value}: must be finite and > 0");
         }
     }
+    if args.noise.is_empty() || args.noise.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
+        bail!("--noise: give finite levels σ >= 0, got {:?}", args.noise);
+    }
     if !(args.curvature_weight >= 0.0 && args.curvature_weight.is_finite()) {
         bail!(
             "--curvature-weight {}: must be finite and >= 0",
@@ -120,7 +131,10 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     if names.is_empty() {
         bail!("the splits {:?} list no shapes", args.splits);
     }
-    let model_config = PointSimplifierConfig::default();
+    let model_config = PointSimplifierConfig {
+        selector: args.selector,
+        ..Default::default()
+    };
     let objective = SimplifierObjective {
         curvature_weight: args.curvature_weight,
         tau: args.tau,
@@ -141,7 +155,9 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 let seed = first_seed.wrapping_add(k as u64);
                 let cloud = sample_surface(&mesh, args.points, seed)
                     .with_context(|| format!("sampling {name}"))?;
-                prepare_training_sample(&cloud.points, &model_config, &objective)
+                let sigma = args.noise[k % args.clouds_per_shape % args.noise.len()];
+                let input = gaussian_noise(&cloud.points, sigma, seed)?;
+                prepare_denoising_sample(&cloud.points, &input, &model_config, &objective)
                     .with_context(|| format!("preparing {name}"))
             })
             .collect()

@@ -162,8 +162,14 @@ fn train_counts_are_bounded_before_the_data_is_read() {
             "--learning-rate NaN: must be finite and > 0",
         ),
         ("--tau", "0", "--tau 0: must be finite and > 0"),
+        ("--noise=0,-0.01", "", "--noise: give finite levels σ >= 0"),
+        ("--noise", "inf", "--noise: give finite levels σ >= 0"),
     ] {
-        let message = refused(&["train", missing, "-o", "w.safetensors", flag, value]);
+        let mut args = vec!["train", missing, "-o", "w.safetensors", flag];
+        if !value.is_empty() {
+            args.push(value);
+        }
+        let message = refused(&args);
         assert!(message.contains(expected), "{flag} {value}: {message}");
     }
 }

@@ -10,26 +10,31 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
 use serde_json::{Map, Value};
 
-use super::{PointSimplifier, PointSimplifierConfig};
+use super::{PointSimplifier, PointSimplifierConfig, SelectorSpace};
 use crate::checkpoint::{checkpoint_error, read_file};
 use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
 
 /// The model's name in checkpoints.
 pub const POINT_SIMPLIFIER_NAME: &str = "point_simplifier";
 
+/// The config entry of [`SelectorSpace`] (0 latent, 1 positions).
+const SELECTOR_ENTRY: &str = "selector";
+
 impl PointSimplifierConfig {
     /// A checkpoint header of this config (no training state).
     pub fn header(&self) -> CheckpointHeader {
-        let config: Map<String, Value> = self
+        let mut config: Map<String, Value> = self
             .entries()
             .iter()
             .map(|(k, v)| ((*k).to_string(), Value::from(*v)))
             .collect();
+        config.insert(SELECTOR_ENTRY.into(), Value::from(self.selector.code()));
         CheckpointHeader::new(POINT_SIMPLIFIER_NAME, config)
     }
 
     /// The config stored in `header` (read from `source`); errors when the header is another
-    /// model's or an entry is missing.
+    /// model's, a count entry is missing or the selector is unknown. Files written before the
+    /// selector entry existed select in latent space.
     pub fn from_header(header: &CheckpointHeader, source: &Path) -> Result<Self> {
         header.expect_model(POINT_SIMPLIFIER_NAME, source)?;
         let mut config = Self::default();
@@ -37,6 +42,12 @@ impl PointSimplifierConfig {
         for key in keys {
             let value = header.config_count(key, source)?;
             config.set_entry(key, value);
+        }
+        if header.config.contains_key(SELECTOR_ENTRY) {
+            let code = header.config_count(SELECTOR_ENTRY, source)?;
+            config.selector = SelectorSpace::from_code(code).ok_or_else(|| {
+                checkpoint_error(source, format!("unknown selector {code} in the config"))
+            })?;
         }
         Ok(config)
     }
@@ -85,6 +96,7 @@ mod tests {
     #[test]
     fn the_config_round_trips_through_the_header_and_a_file() {
         let config = PointSimplifierConfig {
+            selector: SelectorSpace::Position,
             hidden: 8,
             attention_dim: 4,
             ..Default::default()
@@ -109,6 +121,17 @@ mod tests {
         assert_eq!(loaded.config(), model.config());
         let err = PointSimplifier::load(dir.path().join("none.safetensors")).unwrap_err();
         assert!(err.to_string().contains("none.safetensors"), "{err}");
+    }
+
+    #[test]
+    fn a_header_without_selector_is_latent_and_an_unknown_one_is_refused() {
+        let mut header = PointSimplifierConfig::default().header();
+        header.config.remove(SELECTOR_ENTRY);
+        let back = PointSimplifierConfig::from_header(&header, Path::new("old")).unwrap();
+        assert_eq!(back.selector, SelectorSpace::Latent);
+        header.config.insert(SELECTOR_ENTRY.into(), Value::from(7));
+        let err = PointSimplifierConfig::from_header(&header, Path::new("new")).unwrap_err();
+        assert!(err.to_string().contains("unknown selector 7"), "{err}");
     }
 
     #[test]

@@ -23,7 +23,7 @@ pub use mean_aggregation_gnn::MeanAggregationGnn;
 pub use neighbour_index::NeighbourIndex;
 pub use point_mlp::PointMlp;
 pub use point_simplifier::{
-    PointSimplifier, PointSimplifierConfig, SimplifierOutput, StageTimings,
+    PointSimplifier, PointSimplifierConfig, SelectorSpace, SimplifierOutput, StageTimings,
 };
 pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_indexed};
 pub use simplifier_loss::{
@@ -31,6 +31,6 @@ pub use simplifier_loss::{
 };
 pub use simplifier_training::{
     SimplifierObjective, SimplifierTraining, TrainingSample, VALIDATION_RATIOS,
-    prepare_training_sample,
+    prepare_denoising_sample, prepare_training_sample,
 };
 pub use simplify::{Simplification, SimplifyOptions};

@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
+use meshgnn_graph::{FpsStart, fast_farthest_point_sampling};
 
 use super::fused_projector::FusedProjector;
 use super::{
@@ -25,9 +26,42 @@ use super::{
 };
 use crate::{Error, Result};
 
+/// The space the selector runs farthest point sampling in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum SelectorSpace {
+    /// Over the projector's embeddings (ch. 5.3.2, the thesis): the selection follows the
+    /// learned features, but receives no gradient.
+    #[default]
+    Latent,
+    /// Over the positions (exact FPS from the same seeded start); what is learned is AttRef's
+    /// refinement of the kept points. Under the metrics at one physical scale any departure
+    /// from an even spread costs SDM, CE and RE (docs/pcsimplify_model.md, "Selector space").
+    Position,
+}
+
+impl SelectorSpace {
+    /// The checkpoint value of the `selector` config entry (files without it are latent).
+    pub(crate) fn code(self) -> usize {
+        match self {
+            Self::Latent => 0,
+            Self::Position => 1,
+        }
+    }
+
+    /// The space stored as `code`, if any.
+    pub(crate) fn from_code(code: usize) -> Option<Self> {
+        [Self::Latent, Self::Position]
+            .into_iter()
+            .find(|s| s.code() == code)
+    }
+}
+
 /// Hyper-parameters; defaults are the thesis' (ch. 5.6) where it states them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PointSimplifierConfig {
+    /// Where the selector runs FPS (latent, the thesis).
+    pub selector: SelectorSpace,
     /// Channels of every projector layer (64).
     pub hidden: usize,
     /// Point-wise MLP layers before the GNN (3).
@@ -47,6 +81,7 @@ pub struct PointSimplifierConfig {
 impl Default for PointSimplifierConfig {
     fn default() -> Self {
         Self {
+            selector: SelectorSpace::Latent,
             hidden: 64,
             mlp_layers: 3,
             gnn_neighbours: 7,
@@ -59,7 +94,8 @@ impl Default for PointSimplifierConfig {
 }
 
 impl PointSimplifierConfig {
-    /// Every field by name: checked by [`PointSimplifier::new`], stored in checkpoints.
+    /// Every count field by name: checked by [`PointSimplifier::new`], stored in checkpoints
+    /// (the selector beside them, as `selector`).
     pub(crate) fn entries(&self) -> [(&'static str, usize); 7] {
         [
             ("hidden", self.hidden),
@@ -113,7 +149,7 @@ pub struct SimplifierOutput {
     pub timings: StageTimings,
 }
 
-/// The model: projector, latent-FPS selector, AttRef.
+/// The model: projector, FPS selector (latent or positions), AttRef.
 #[derive(Clone, Debug)]
 pub struct PointSimplifier {
     config: PointSimplifierConfig,
@@ -215,7 +251,7 @@ impl PointSimplifier {
 
     /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
     /// keeps `target` points (`1 ≤ target ≤ N`) chosen by latent FPS (`selection`, `seed`) and
-    /// refined by AttRef. A `graph` built by [`NeighbourIndex::from_knn_index`] over these
+    /// refined by AttRef (positional FPS when the config's selector says so). A `graph` built by [`NeighbourIndex::from_knn_index`] over these
     /// `points` lends its kd-tree to AttRef's queries. Errors on a bad target, a graph over a
     /// different N or non-finite points.
     pub fn forward(
@@ -260,14 +296,19 @@ impl PointSimplifier {
             (Some(embeddings), latent)
         };
         let t1 = Instant::now();
-        let indices = latent_farthest_point_sampling(
-            &latent,
-            self.config.hidden,
-            points,
-            target,
-            selection,
-            seed,
-        )?;
+        let indices = match self.config.selector {
+            SelectorSpace::Latent => latent_farthest_point_sampling(
+                &latent,
+                self.config.hidden,
+                points,
+                target,
+                selection,
+                seed,
+            )?,
+            SelectorSpace::Position => {
+                fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?
+            }
+        };
         let t2 = Instant::now();
         let rgraph = match graph.knn_index() {
             Some(index) => refinement_graph_indexed(

@@ -94,13 +94,15 @@ impl SimplifierObjective {
 /// One training cloud with everything the loss needs, precomputed once.
 #[derive(Clone, Debug)]
 pub struct TrainingSample {
-    /// Points in the unit-sphere frame, `#N×3`.
+    /// The points the model reads, in the unit-sphere frame of the clean cloud, `#N×3`.
     pub points: Vec<[f32; 3]>,
-    /// The projector's k-NN graph.
+    /// The projector's k-NN graph over `points`.
     pub graph: NeighbourIndex,
-    /// `points` as a tensor `(N, 3)`.
+    /// The clean cloud the loss compares with (equal to `points` without noise), `#N×3`.
+    pub clean: Vec<[f32; 3]>,
+    /// `clean` as a tensor `(N, 3)`.
     pub positions: Tensor,
-    /// Adaptive Chamfer weights (eq. 5.7), `(N)`.
+    /// Adaptive Chamfer weights (eq. 5.7) of `clean`, `(N)`.
     pub weights: Tensor,
 }
 
@@ -120,23 +122,47 @@ pub fn prepare_training_sample(
     model: &PointSimplifierConfig,
     objective: &SimplifierObjective,
 ) -> Result<TrainingSample> {
-    let n = points.len();
+    prepare_denoising_sample(points, points, model, objective)
+}
+
+/// [`prepare_training_sample`] for a model that reads `input: #N×3` (`clean` with noise) and
+/// is scored against `clean: #N×3`: both are normalised with the clean cloud's centre and
+/// radius, so the loss asks the refinement to undo the noise (ch. 5.5.7 tests that robustness;
+/// training for it is beyond the thesis). Errors when the two clouds differ in size.
+pub fn prepare_denoising_sample(
+    clean: &[[f32; 3]],
+    input: &[[f32; 3]],
+    model: &PointSimplifierConfig,
+    objective: &SimplifierObjective,
+) -> Result<TrainingSample> {
+    let n = clean.len();
     if n < 3 {
         return Err(Error::Invalid {
             what: "training cloud".into(),
             reason: format!("needs at least 3 points, has {n}"),
         });
     }
-    let unit = unit_sphere_normalization(points)?.apply(points);
+    if input.len() != n {
+        return Err(Error::Invalid {
+            what: "training input".into(),
+            reason: format!("{} input points for {n} clean ones", input.len()),
+        });
+    }
+    let norm = unit_sphere_normalization(clean)?;
+    let unit = norm.apply(clean);
+    let points = norm.apply(input);
     let features = curvature_features(&unit, objective.curvature_neighbours.clamp(2, n - 1))?;
     let weights = adaptive_chamfer_weights(&features.mean_curvature, objective.tau)?;
     let device = Device::Cpu;
-    let graph =
-        NeighbourIndex::from_knn(&knn_graph(&unit, model.gnn_neighbours.min(n - 1))?, &device)?;
+    let graph = NeighbourIndex::from_knn(
+        &knn_graph(&points, model.gnn_neighbours.min(n - 1))?,
+        &device,
+    )?;
     Ok(TrainingSample {
         positions: Tensor::from_slice(unit.as_flattened(), (n, 3), &device)?,
         weights: Tensor::from_vec(weights, n, &device)?,
-        points: unit,
+        points,
+        clean: unit,
         graph,
     })
 }
@@ -197,7 +223,7 @@ impl SimplifierTraining {
             .model
             .forward(&sample.points, &sample.graph, target, exact, seed, train)?;
         let curvature = CurvatureTarget::new(
-            &sample.points,
+            &sample.clean,
             out.indices.len(),
             self.objective.curvature_neighbours,
         )?;
@@ -352,6 +378,30 @@ mod tests {
     fn step(t: &SimplifierTraining, adam: &mut crate::Adam, s: &TrainingSample, target: usize) {
         adam.backward_step(&t.loss(s, target, 3, true).unwrap())
             .unwrap();
+    }
+
+    #[test]
+    fn a_denoising_sample_reads_the_noisy_cloud_and_targets_the_clean_one() {
+        let (mc, objective, clean) = tiny();
+        let pts = sample_surface(&subdivided_cube(3), 300, 2).unwrap().points;
+        let noisy: Vec<[f32; 3]> = pts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| [p[0] + 0.01 * (i % 3) as f32, p[1], p[2]])
+            .collect();
+        let s = prepare_denoising_sample(&pts, &noisy, &mc, &objective).unwrap();
+        assert_eq!(s.clean, clean.points);
+        let pos: Vec<f32> = s.positions.flatten_all().unwrap().to_vec1().unwrap();
+        assert_eq!(pos, clean.clean.as_flattened());
+        // the input is normalised with the clean cloud's centre and radius
+        let norm = unit_sphere_normalization(&pts).unwrap();
+        assert_eq!(s.points, norm.apply(&noisy));
+        assert_ne!(s.points, s.clean);
+        let err = prepare_denoising_sample(&pts, &noisy[1..], &mc, &objective).unwrap_err();
+        assert!(
+            err.to_string().contains("299 input points for 300"),
+            "{err}"
+        );
     }
 
     #[test]

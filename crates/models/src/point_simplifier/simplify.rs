@@ -164,12 +164,46 @@ mod tests {
     use candle_core::{DType, Device};
     use candle_nn::{VarBuilder, VarMap};
     use meshgnn_geometry::{icosphere, vertex_normals};
-    use meshgnn_graph::vertex_adjacency;
+    use meshgnn_graph::{FpsStart, fast_farthest_point_sampling, vertex_adjacency};
 
-    fn model() -> PointSimplifier {
+    use super::super::{PointSimplifierConfig, SelectorSpace};
+
+    fn model_selecting_in(selector: SelectorSpace) -> PointSimplifier {
         let map = VarMap::new();
         let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
-        PointSimplifier::new(vb, &super::super::PointSimplifierConfig::default()).unwrap()
+        let config = PointSimplifierConfig {
+            selector,
+            ..Default::default()
+        };
+        PointSimplifier::new(vb, &config).unwrap()
+    }
+
+    fn model() -> PointSimplifier {
+        model_selecting_in(SelectorSpace::Latent)
+    }
+
+    #[test]
+    fn the_position_selector_keeps_the_points_fps_keeps() {
+        let pts: Vec<[f32; 3]> = icosphere(3)
+            .vertices()
+            .iter()
+            .map(|p| [p[0] * 3.0, p[1] * 1.5 - 2.0, p[2]])
+            .collect();
+        let o = SimplifyOptions {
+            seed: 5,
+            ..Default::default()
+        };
+        let out = model_selecting_in(SelectorSpace::Position)
+            .simplify(&pts, None, None, 40, &o)
+            .unwrap();
+        let unit = unit_sphere_normalization(&pts).unwrap().apply(&pts);
+        let fps = fast_farthest_point_sampling(&unit, 40, FpsStart::Seeded(5)).unwrap();
+        assert_eq!(out.indices, fps);
+        let latent = model().simplify(&pts, None, None, 40, &o).unwrap();
+        assert_ne!(
+            latent.indices, fps,
+            "an untrained projector is not the identity"
+        );
     }
 
     #[test]
