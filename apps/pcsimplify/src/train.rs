@@ -66,7 +66,8 @@ pub struct TrainArgs {
     /// compares with the clean cloud (training the refinement to denoise).
     #[arg(long, value_delimiter = ',', default_values_t = [0.0])]
     pub noise: Vec<f64>,
-    /// Space of the selector's FPS: `latent` (the thesis) or `position` (stored in the weights).
+    /// Where the selector runs FPS: `latent` (the thesis), `position`, or `centroidal`
+    /// (positions, then Lloyd steps snapped to the input points); stored in the weights.
     #[arg(long, value_enum, default_value_t = SelectorSpace::Latent)]
     pub selector: SelectorSpace,
     /// Shapes held out of training to pick the best epoch (0: keep the last epoch).

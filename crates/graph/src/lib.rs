@@ -14,6 +14,7 @@ mod pooling_matrices;
 mod qem;
 
 mod candidate_triangles;
+mod centroidal_relaxation;
 mod csr_matrix;
 mod farthest_point_sampling;
 mod fast_farthest_point_sampling;
@@ -35,6 +36,7 @@ pub use qem::{
 };
 
 pub use candidate_triangles::candidate_triangles;
+pub use centroidal_relaxation::{centroidal_relaxation, centroidal_relaxation_indexed};
 pub use csr_matrix::CsrMatrix;
 pub use farthest_point_sampling::{
     FpsStart, farthest_point_sampling, farthest_point_sampling_batch,

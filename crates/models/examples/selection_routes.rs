@@ -1,16 +1,18 @@
 //! Selection routes under the fair metrics (docs/pcsimplify_model.md, "Selector space"): FPS
 //! whose distances are multiplied by a curvature weight `1 + β·K̄/mean K̄` (the best case of a
 //! learned bias of FPS distances: the bias is the quantity the curvature metrics read), and FPS
-//! followed by Lloyd relaxation over the input points (centroidal, optionally snapped back to
-//! the nearest input point), against FPS and random, at the benchmark's ratios; means over the
-//! meshes of a folder (their vertices as the cloud).
+//! followed by three Lloyd steps snapped to the input points (`centroidal_relaxation`, the
+//! bundled simplifier's selector), against FPS and random, at the benchmark's ratios; means over
+//! the meshes of a folder (their vertices as the cloud).
 //!
 //! ```text
 //! cargo run --release -p meshgnn-models --example selection_routes -- DIR [--betas 0.25,1]
 //! ```
 
-use meshgnn_geometry::{SpatialIndex, curvature_features, read_mesh, squared_distance};
-use meshgnn_graph::{FpsStart, fast_farthest_point_sampling, uniform_sampling};
+use meshgnn_geometry::{curvature_features, read_mesh, squared_distance};
+use meshgnn_graph::{
+    FpsStart, centroidal_relaxation, fast_farthest_point_sampling, uniform_sampling,
+};
 use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
 use rayon::prelude::*;
 
@@ -35,41 +37,6 @@ fn weighted_fps(points: &[[f32; 3]], weight: &[f32], count: usize) -> Vec<[f32; 
         current = best.1;
     }
     kept
-}
-
-/// `iterations` Lloyd steps from `start` over the input points (each kept point moves to the
-/// mean of the input points nearest to it), snapped to the nearest input point if `snap`.
-fn lloyd(
-    points: &[[f32; 3]],
-    start: Vec<[f32; 3]>,
-    iterations: usize,
-    snap: bool,
-) -> AnyResult<Vec<[f32; 3]>> {
-    let input = SpatialIndex::new(points)?;
-    let mut centres = start;
-    for _ in 0..iterations {
-        let owner = SpatialIndex::new(&centres)?.knn(points, 1)?;
-        let mut sums = vec![[0f64; 4]; centres.len()];
-        for (i, p) in points.iter().enumerate() {
-            let s = &mut sums[owner.row(i)[0] as usize];
-            for a in 0..3 {
-                s[a] += f64::from(p[a]);
-            }
-            s[3] += 1.0;
-        }
-        for (c, s) in centres.iter_mut().zip(&sums) {
-            if s[3] > 0.0 {
-                *c = [0, 1, 2].map(|a| (s[a] / s[3]) as f32);
-            }
-        }
-        if snap {
-            let nearest = input.knn(&centres, 1)?;
-            for (j, c) in centres.iter_mut().enumerate() {
-                *c = points[nearest.row(j)[0] as usize];
-            }
-        }
-    }
-    Ok(centres)
 }
 
 fn main() -> AnyResult<()> {
@@ -113,25 +80,19 @@ fn main() -> AnyResult<()> {
                         .map(|&i| points[i as usize])
                         .collect::<Vec<_>>()
                 };
-                let fps = at(fast_farthest_point_sampling(
-                    &points,
-                    count,
-                    FpsStart::Seeded(0),
-                )?);
+                let fps_indices =
+                    fast_farthest_point_sampling(&points, count, FpsStart::Seeded(0))?;
                 let mut routes = vec![
                     (
                         "random".to_string(),
                         at(uniform_sampling(points.len(), count, 0)?),
                     ),
                     (
-                        "lloyd 3".to_string(),
-                        lloyd(&points, fps.clone(), 3, false)?,
-                    ),
-                    (
                         "lloyd 3 snapped".to_string(),
-                        lloyd(&points, fps.clone(), 3, true)?,
+                        at(centroidal_relaxation(&points, &fps_indices, 3)?),
                     ),
                 ];
+                let fps = at(fps_indices);
                 for &beta in &betas {
                     let weight: Vec<f32> =
                         relative.iter().map(|&t| (1.0 + beta * t).powi(2)).collect();

@@ -149,11 +149,11 @@ mod tests {
         assert_eq!(hand.model.template().vertex_count(), 2833);
         let simplifier: crate::point_simplifier::PointSimplifier =
             load("point_simplifier").unwrap();
-        let position_selector = crate::point_simplifier::PointSimplifierConfig {
-            selector: crate::point_simplifier::SelectorSpace::Position,
+        let centroidal_selector = crate::point_simplifier::PointSimplifierConfig {
+            selector: crate::point_simplifier::SelectorSpace::Centroidal,
             ..Default::default()
         };
-        assert_eq!(simplifier.config(), &position_selector);
+        assert_eq!(simplifier.config(), &centroidal_selector);
         for (name, decoder) in [
             (
                 "expression_generator",

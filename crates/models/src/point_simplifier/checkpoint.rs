@@ -17,7 +17,7 @@ use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
 /// The model's name in checkpoints.
 pub const POINT_SIMPLIFIER_NAME: &str = "point_simplifier";
 
-/// The config entry of [`SelectorSpace`] (0 latent, 1 positions).
+/// The config entry of [`SelectorSpace`] (0 latent, 1 positions, 2 centroidal).
 const SELECTOR_ENTRY: &str = "selector";
 
 impl PointSimplifierConfig {

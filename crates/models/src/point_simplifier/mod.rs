@@ -23,7 +23,8 @@ pub use mean_aggregation_gnn::MeanAggregationGnn;
 pub use neighbour_index::NeighbourIndex;
 pub use point_mlp::PointMlp;
 pub use point_simplifier::{
-    PointSimplifier, PointSimplifierConfig, SelectorSpace, SimplifierOutput, StageTimings,
+    CENTROIDAL_STEPS, PointSimplifier, PointSimplifierConfig, SelectorSpace, SimplifierOutput,
+    StageTimings,
 };
 pub use refinement_graph::{RefinementGraph, refinement_graph, refinement_graph_indexed};
 pub use simplifier_loss::{

@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
-use meshgnn_graph::{FpsStart, fast_farthest_point_sampling};
+use meshgnn_graph::{FpsStart, centroidal_relaxation_indexed, fast_farthest_point_sampling};
 
 use super::fused_projector::FusedProjector;
 use super::{
@@ -38,7 +38,15 @@ pub enum SelectorSpace {
     /// refinement of the kept points. Under the metrics at one physical scale any departure
     /// from an even spread costs SDM, CE and RE (docs/pcsimplify_model.md, "Selector space").
     Position,
+    /// Over the positions, then [`CENTROIDAL_STEPS`] Lloyd steps snapped back to the input
+    /// points ([`meshgnn_graph::centroidal_relaxation`]): evener and centred, and drawn to local
+    /// means rather than to FPS's outliers on noisy clouds.
+    Centroidal,
 }
+
+/// Lloyd steps of [`SelectorSpace::Centroidal`] (3: the third still lowered SDM on the test
+/// families, docs/pcsimplify_model.md).
+pub const CENTROIDAL_STEPS: usize = 3;
 
 impl SelectorSpace {
     /// The checkpoint value of the `selector` config entry (files without it are latent).
@@ -46,12 +54,13 @@ impl SelectorSpace {
         match self {
             Self::Latent => 0,
             Self::Position => 1,
+            Self::Centroidal => 2,
         }
     }
 
     /// The space stored as `code`, if any.
     pub(crate) fn from_code(code: usize) -> Option<Self> {
-        [Self::Latent, Self::Position]
+        [Self::Latent, Self::Position, Self::Centroidal]
             .into_iter()
             .find(|s| s.code() == code)
     }
@@ -308,6 +317,12 @@ impl PointSimplifier {
             SelectorSpace::Position => {
                 fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?
             }
+            SelectorSpace::Centroidal => centroidal_relaxation_indexed(
+                points,
+                graph.knn_index(),
+                &fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?,
+                CENTROIDAL_STEPS,
+            )?,
         };
         let t2 = Instant::now();
         let rgraph = match graph.knn_index() {

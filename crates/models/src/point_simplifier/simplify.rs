@@ -164,9 +164,11 @@ mod tests {
     use candle_core::{DType, Device};
     use candle_nn::{VarBuilder, VarMap};
     use meshgnn_geometry::{icosphere, vertex_normals};
-    use meshgnn_graph::{FpsStart, fast_farthest_point_sampling, vertex_adjacency};
+    use meshgnn_graph::{
+        FpsStart, centroidal_relaxation, fast_farthest_point_sampling, vertex_adjacency,
+    };
 
-    use super::super::{PointSimplifierConfig, SelectorSpace};
+    use super::super::{CENTROIDAL_STEPS, PointSimplifierConfig, SelectorSpace};
 
     fn model_selecting_in(selector: SelectorSpace) -> PointSimplifier {
         let map = VarMap::new();
@@ -183,7 +185,7 @@ mod tests {
     }
 
     #[test]
-    fn the_position_selector_keeps_the_points_fps_keeps() {
+    fn position_selectors_keep_the_points_fps_and_its_relaxation_keep() {
         let pts: Vec<[f32; 3]> = icosphere(3)
             .vertices()
             .iter()
@@ -204,6 +206,12 @@ mod tests {
             latent.indices, fps,
             "an untrained projector is not the identity"
         );
+        let centroidal = model_selecting_in(SelectorSpace::Centroidal)
+            .simplify(&pts, None, None, 40, &o)
+            .unwrap();
+        let relaxed = centroidal_relaxation(&unit, &fps, CENTROIDAL_STEPS).unwrap();
+        assert_eq!(centroidal.indices, relaxed);
+        assert_ne!(relaxed, fps);
     }
 
     #[test]

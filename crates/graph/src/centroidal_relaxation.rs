@@ -1,0 +1,218 @@
+//! Lloyd relaxation of a point selection over the cloud it was taken from (a discrete
+//! centroidal Voronoi tessellation, kept on the input points): each kept point moves to the
+//! mean of the input points nearest to it, then to the input point nearest that mean.
+//!
+//! FPS leaves its points evenly spread but not centred in the regions they stand for; the
+//! curvature metrics at one physical scale (SDM, CE, RE of thesis ch. 5.4) and the Chamfer
+//! distance reward centred points (docs/pcsimplify_model.md, "Selector space"). Snapping back
+//! keeps the result a selection — indices into the input — so it prefers points near local
+//! means over FPS's outliers on noisy clouds.
+//!
+//! # Conventions
+//! - Each step: every input point joins its nearest kept point (ties to the smaller kept
+//!   position, as [`SpatialIndex`] orders them); a kept point with members moves to their mean
+//!   (summed in input order, in `f64`), one without stays; then, in kept order, each takes the
+//!   nearest input point to its mean that no earlier kept point took this step.
+//! - The result has the length and order of `kept`, stays distinct and depends only on the
+//!   inputs: deterministic, no seed. Cost per step: two k-NN passes, O(N log M + M log N).
+
+use meshgnn_geometry::SpatialIndex;
+
+use crate::{Error, Result};
+
+/// Input points a snapped mean looks through for one no earlier kept point took; beyond them
+/// the nearest free point is searched over the whole cloud (rare: only where kept points are
+/// denser than this in input points).
+const SNAP_CANDIDATES: usize = 8;
+
+/// `steps` Lloyd steps of the selection `kept` (distinct indices into `points: #N×3`), each
+/// snapped back to the input points. Errors on an index out of range or repeated, or on
+/// non-finite points.
+///
+/// ```
+/// use meshgnn_graph::centroidal_relaxation;
+/// // Ten points on a line; keeping the two ends, Lloyd moves them to the centres of the halves.
+/// let points: Vec<[f32; 3]> = (0..10).map(|i| [i as f32, 0.0, 0.0]).collect();
+/// assert_eq!(centroidal_relaxation(&points, &[0, 9], 1)?, vec![2, 7]);
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn centroidal_relaxation(points: &[[f32; 3]], kept: &[u32], steps: usize) -> Result<Vec<u32>> {
+    match steps == 0 || kept.is_empty() {
+        true => centroidal_relaxation_indexed(points, None, kept, steps),
+        false => {
+            centroidal_relaxation_indexed(points, Some(&SpatialIndex::new(points)?), kept, steps)
+        }
+    }
+}
+
+/// [`centroidal_relaxation`] with a [`SpatialIndex`] already built over `points` (one k-d tree
+/// per cloud: the point simplifier's k-NN graph lends its own); `None` builds one. Errors as
+/// [`centroidal_relaxation`] does, and on an index over another number of points.
+pub fn centroidal_relaxation_indexed(
+    points: &[[f32; 3]],
+    index: Option<&SpatialIndex>,
+    kept: &[u32],
+    steps: usize,
+) -> Result<Vec<u32>> {
+    let n = points.len();
+    if let Some(index) = index
+        && index.len() != n
+    {
+        return Err(Error::InvalidParameter {
+            name: "index",
+            message: format!("covers {} points, the cloud has {n}", index.len()),
+        });
+    }
+    let mut taken = vec![false; n];
+    for &i in kept {
+        let slot = taken
+            .get_mut(i as usize)
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "kept",
+                message: format!("index {i} is outside the {n} points"),
+            })?;
+        if *slot {
+            return Err(Error::InvalidParameter {
+                name: "kept",
+                message: format!("index {i} is kept twice"),
+            });
+        }
+        *slot = true;
+    }
+    let mut current = kept.to_vec();
+    if steps == 0 || kept.is_empty() {
+        return Ok(current);
+    }
+    let built;
+    let input = match index {
+        Some(index) => index,
+        None => {
+            built = SpatialIndex::new(points)?;
+            &built
+        }
+    };
+    for _ in 0..steps {
+        let centres: Vec<[f32; 3]> = current.iter().map(|&i| points[i as usize]).collect();
+        let owner = SpatialIndex::new(&centres)?.knn(points, 1)?;
+        let mut sums = vec![[0f64; 4]; current.len()];
+        for (p, &o) in points.iter().zip(&owner.indices) {
+            let s = &mut sums[o as usize];
+            for a in 0..3 {
+                s[a] += f64::from(p[a]);
+            }
+            s[3] += 1.0;
+        }
+        let means: Vec<[f32; 3]> = sums
+            .iter()
+            .zip(&centres)
+            .map(|(s, &c)| match s[3] > 0.0 {
+                true => [0, 1, 2].map(|a| (s[a] / s[3]) as f32),
+                false => c,
+            })
+            .collect();
+        let candidates = input.knn(&means, SNAP_CANDIDATES.min(n))?;
+        taken.fill(false);
+        for (j, mean) in means.iter().enumerate() {
+            let row = &candidates.indices[j * candidates.k..(j + 1) * candidates.k];
+            let pick = match row.iter().find(|&&i| !taken[i as usize]) {
+                Some(&i) => i,
+                None => nearest_free(points, &taken, mean),
+            };
+            taken[pick as usize] = true;
+            current[j] = pick;
+        }
+    }
+    Ok(current)
+}
+
+/// The input point nearest `q` that is not taken (ties to the smaller index); some point is
+/// free because fewer points are kept than there are.
+fn nearest_free(points: &[[f32; 3]], taken: &[bool], q: &[f32; 3]) -> u32 {
+    let mut best = (f32::INFINITY, 0u32);
+    for (i, p) in points.iter().enumerate() {
+        let d = meshgnn_geometry::squared_distance(p, q);
+        if !taken[i] && d < best.0 {
+            best = (d, i as u32);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{FpsStart, fast_farthest_point_sampling};
+    use meshgnn_geometry::{icosphere, sample_surface};
+
+    #[test]
+    fn a_hand_computed_step_on_a_grid() {
+        // 4×4 grid, keep the four corners: each quadrant's mean is (0.5, 0.5) from its corner,
+        // snapped to the nearest grid point (ties: smaller index).
+        let grid: Vec<[f32; 3]> = (0..16)
+            .map(|i| [(i % 4) as f32, (i / 4) as f32, 0.0])
+            .collect();
+        let out = centroidal_relaxation(&grid, &[0, 3, 12, 15], 1).unwrap();
+        assert_eq!(out, vec![0, 2, 8, 10]);
+        // the means are exact; the second step leaves them
+        assert_eq!(centroidal_relaxation(&grid, &out, 1).unwrap(), out);
+    }
+
+    #[test]
+    fn distinct_deterministic_and_centred() {
+        // random surface samples: FPS spreads them evenly but off-centre
+        let sphere = sample_surface(&icosphere(3), 4000, 1).unwrap().points;
+        let fps = fast_farthest_point_sampling(&sphere, 120, FpsStart::Seeded(2)).unwrap();
+        let out = centroidal_relaxation(&sphere, &fps, 3).unwrap();
+        assert_eq!(out, centroidal_relaxation(&sphere, &fps, 3).unwrap());
+        let mut sorted = out.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(sorted.len(), 120);
+        // the discrete CVT energy (mean squared distance to the nearest kept point) falls
+        let energy = |kept: &[u32]| {
+            let centres: Vec<[f32; 3]> = kept.iter().map(|&i| sphere[i as usize]).collect();
+            let nn = SpatialIndex::new(&centres)
+                .unwrap()
+                .knn(&sphere, 1)
+                .unwrap();
+            nn.squared_distances
+                .iter()
+                .map(|&d| f64::from(d))
+                .sum::<f64>()
+        };
+        assert!(
+            energy(&out) < 0.97 * energy(&fps),
+            "{} vs {}",
+            energy(&out),
+            energy(&fps)
+        );
+    }
+
+    #[test]
+    fn crowded_snaps_stay_distinct_and_bad_selections_are_refused() {
+        // every point kept but one: all snaps compete for the same few points
+        let line: Vec<[f32; 3]> = (0..12).map(|i| [i as f32, 0.0, 0.0]).collect();
+        let kept: Vec<u32> = (0..11).collect();
+        let mut out = centroidal_relaxation(&line, &kept, 2).unwrap();
+        out.sort_unstable();
+        out.dedup();
+        assert_eq!(out.len(), 11);
+        assert_eq!(
+            centroidal_relaxation(&line, &[], 3).unwrap(),
+            Vec::<u32>::new()
+        );
+        assert_eq!(
+            centroidal_relaxation(&line, &[4, 1], 0).unwrap(),
+            vec![4, 1]
+        );
+        assert!(centroidal_relaxation(&line, &[1, 1], 1).is_err());
+        assert!(centroidal_relaxation(&line, &[12], 1).is_err());
+        let other = SpatialIndex::new(&line[..5]).unwrap();
+        assert!(centroidal_relaxation_indexed(&line, Some(&other), &[1], 1).is_err());
+        let own = SpatialIndex::new(&line).unwrap();
+        assert_eq!(
+            centroidal_relaxation_indexed(&line, Some(&own), &[0, 11], 2).unwrap(),
+            centroidal_relaxation(&line, &[0, 11], 2).unwrap()
+        );
+    }
+}
