@@ -36,15 +36,18 @@ def main():
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     os.makedirs(args.output, exist_ok=True)
-    for i, name in enumerate(sorted(os.listdir(args.input))):
-        if not name.lower().endswith((".obj", ".ply", ".off")):
-            continue
+    names = [n for n in sorted(os.listdir(args.input)) if n.lower().endswith((".obj", ".ply", ".off"))]
+    stems = [os.path.splitext(n)[0] for n in names]
+    for i, name in enumerate(names):
+        stem, ext = os.path.splitext(name)
+        # two meshes with one stem (airplane.obj, airplane.ply) keep both, named by extension
+        out_stem = stem if stems.count(stem) == 1 else f"{stem}_{ext[1:]}"
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(os.path.join(args.input, name))
         mesh = ms.current_mesh()
         rng = np.random.default_rng(args.seed + i)
         points = sample(mesh.vertex_matrix(), mesh.face_matrix(), args.points, rng)
-        out = os.path.join(args.output, os.path.splitext(name)[0] + ".xyz")
+        out = os.path.join(args.output, out_stem + ".xyz")
         np.savetxt(out, points, fmt="%.7g")
         print(f"{out}: {len(points)} points from {mesh.vertex_number()} vertices")
 
