@@ -37,21 +37,20 @@ const SNAP_CANDIDATES: usize = 8;
 /// # Ok::<(), meshgnn_graph::Error>(())
 /// ```
 pub fn centroidal_relaxation(points: &[[f32; 3]], kept: &[u32], steps: usize) -> Result<Vec<u32>> {
-    match steps == 0 || kept.is_empty() {
-        true => centroidal_relaxation_indexed(points, None, kept, steps),
-        false => {
-            centroidal_relaxation_indexed(points, Some(&SpatialIndex::new(points)?), kept, steps)
-        }
-    }
+    centroidal_relaxation_indexed(points, None, kept, None, steps)
 }
 
 /// [`centroidal_relaxation`] with a [`SpatialIndex`] already built over `points` (one k-d tree
-/// per cloud: the point simplifier's k-NN graph lends its own); `None` builds one. Errors as
-/// [`centroidal_relaxation`] does, and on an index over another number of points.
+/// per cloud: the point simplifier's k-NN graph lends its own); `None` builds one. `owners:
+/// #N`, when the caller knows it, is the position in `kept` of every input point's nearest kept
+/// point (as [`crate::fast_farthest_point_sampling_with_owners`] gives it): the first step
+/// then skips its k-NN pass. Errors as [`centroidal_relaxation`] does, on an index over
+/// another number of points, and on owners of another length or out of range.
 pub fn centroidal_relaxation_indexed(
     points: &[[f32; 3]],
     index: Option<&SpatialIndex>,
     kept: &[u32],
+    owners: Option<&[u32]>,
     steps: usize,
 ) -> Result<Vec<u32>> {
     let n = points.len();
@@ -79,6 +78,20 @@ pub fn centroidal_relaxation_indexed(
         }
         *slot = true;
     }
+    if let Some(owners) = owners {
+        if owners.len() != n {
+            return Err(Error::InvalidParameter {
+                name: "owners",
+                message: format!("{} owners for {n} points", owners.len()),
+            });
+        }
+        if let Some(&o) = owners.iter().find(|&&o| o as usize >= kept.len()) {
+            return Err(Error::InvalidParameter {
+                name: "owners",
+                message: format!("owner {o} is outside the {} kept points", kept.len()),
+            });
+        }
+    }
     let mut current = kept.to_vec();
     if steps == 0 || kept.is_empty() {
         return Ok(current);
@@ -91,11 +104,18 @@ pub fn centroidal_relaxation_indexed(
             &built
         }
     };
-    for _ in 0..steps {
+    for step in 0..steps {
         let centres: Vec<[f32; 3]> = current.iter().map(|&i| points[i as usize]).collect();
-        let owner = SpatialIndex::new(&centres)?.knn(points, 1)?;
+        let assigned;
+        let owner = match owners.filter(|_| step == 0) {
+            Some(owners) => owners,
+            None => {
+                assigned = SpatialIndex::new(&centres)?.knn(points, 1)?.indices;
+                &assigned
+            }
+        };
         let mut sums = vec![[0f64; 4]; current.len()];
-        for (p, &o) in points.iter().zip(&owner.indices) {
+        for (p, &o) in points.iter().zip(owner) {
             let s = &mut sums[o as usize];
             for a in 0..3 {
                 s[a] += f64::from(p[a]);
@@ -141,7 +161,7 @@ fn nearest_free(points: &[[f32; 3]], taken: &[bool], q: &[f32; 3]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{FpsStart, fast_farthest_point_sampling};
+    use crate::{FpsStart, fast_farthest_point_sampling, fast_farthest_point_sampling_with_owners};
     use meshgnn_geometry::{icosphere, sample_surface};
 
     #[test]
@@ -208,11 +228,44 @@ mod tests {
         assert!(centroidal_relaxation(&line, &[1, 1], 1).is_err());
         assert!(centroidal_relaxation(&line, &[12], 1).is_err());
         let other = SpatialIndex::new(&line[..5]).unwrap();
-        assert!(centroidal_relaxation_indexed(&line, Some(&other), &[1], 1).is_err());
+        assert!(centroidal_relaxation_indexed(&line, Some(&other), &[1], None, 1).is_err());
         let own = SpatialIndex::new(&line).unwrap();
         assert_eq!(
-            centroidal_relaxation_indexed(&line, Some(&own), &[0, 11], 2).unwrap(),
+            centroidal_relaxation_indexed(&line, Some(&own), &[0, 11], None, 2).unwrap(),
             centroidal_relaxation(&line, &[0, 11], 2).unwrap()
         );
+        assert!(centroidal_relaxation_indexed(&line, None, &[0, 11], Some(&[0; 5]), 1).is_err());
+        assert!(centroidal_relaxation_indexed(&line, None, &[0, 11], Some(&[2; 12]), 1).is_err());
+    }
+
+    #[test]
+    fn fps_owners_are_the_first_assignment() {
+        // uniform, clustered and duplicated clouds: FPS's owners are the k-NN assignment, so
+        // relaxing from them gives the same selection as relaxing from scratch
+        let sphere = sample_surface(&icosphere(3), 3000, 7).unwrap().points;
+        let clustered: Vec<[f32; 3]> = sphere
+            .iter()
+            .enumerate()
+            .map(|(i, p)| match i % 3 {
+                0 => [p[0] * 0.01, p[1] * 0.01, p[2] * 0.01],
+                _ => *p,
+            })
+            .collect();
+        let duplicated: Vec<[f32; 3]> = sphere[..500].iter().cycle().take(1500).copied().collect();
+        for (cloud, k) in [(&sphere, 150), (&clustered, 150), (&duplicated, 700)] {
+            let (kept, owners) =
+                fast_farthest_point_sampling_with_owners(cloud, k, FpsStart::Seeded(2)).unwrap();
+            assert_eq!(
+                kept,
+                fast_farthest_point_sampling(cloud, k, FpsStart::Seeded(2)).unwrap()
+            );
+            let centres: Vec<[f32; 3]> = kept.iter().map(|&i| cloud[i as usize]).collect();
+            let nearest = SpatialIndex::new(&centres).unwrap().knn(cloud, 1).unwrap();
+            assert_eq!(owners, nearest.indices);
+            assert_eq!(
+                centroidal_relaxation_indexed(cloud, None, &kept, Some(&owners), 3).unwrap(),
+                centroidal_relaxation(cloud, &kept, 3).unwrap()
+            );
+        }
     }
 }

@@ -39,12 +39,14 @@ struct FpsState<'a> {
     dist: Vec<f32>,
     /// Per node: largest `(distance, index)` of its points, ties to the smaller index.
     node_max: Vec<(f32, u32)>,
+    /// Per reordered point: position in the selection of its nearest selected point.
+    owner: Vec<u32>,
 }
 
 impl FpsState<'_> {
     /// Lowers the distances of the points of `node` that are closer to `q` (at slot `slot`,
     /// whose own distance was just set to [`SELECTED`]) and refreshes the node maxima.
-    fn update(&mut self, node: usize, q: &[f32; 3], slot: u32) {
+    fn update(&mut self, node: usize, q: &[f32; 3], slot: u32, position: u32) {
         let nd = self.tree.nodes()[node];
         let contains = nd.start <= slot && slot < nd.end;
         if !contains && box_squared_distance(q, &nd.lo, &nd.hi) >= self.node_max[node].0 {
@@ -53,14 +55,16 @@ impl FpsState<'_> {
         if node >= self.tree.first_leaf() {
             let (s, e) = (nd.start as usize, nd.end as usize);
             let mut best = (f32::NEG_INFINITY, u32::MAX);
-            for ((p, d), &id) in self.tree.slot_points()[s..e]
+            for (((p, d), o), &id) in self.tree.slot_points()[s..e]
                 .iter()
                 .zip(&mut self.dist[s..e])
+                .zip(&mut self.owner[s..e])
                 .zip(&self.tree.slot_ids()[s..e])
             {
                 let nd2 = squared_distance(p, q);
                 if nd2 < *d {
                     *d = nd2;
+                    *o = position;
                 }
                 if better((*d, id), best) {
                     best = (*d, id);
@@ -70,8 +74,8 @@ impl FpsState<'_> {
             return;
         }
         let (l, r) = (2 * node + 1, 2 * node + 2);
-        self.update(l, q, slot);
-        self.update(r, q, slot);
+        self.update(l, q, slot, position);
+        self.update(r, q, slot, position);
         let (a, b) = (self.node_max[l], self.node_max[r]);
         self.node_max[node] = if better(a, b) { a } else { b };
     }
@@ -99,9 +103,31 @@ pub fn fast_farthest_point_sampling(
     k: usize,
     start: FpsStart,
 ) -> Result<Vec<u32>> {
+    Ok(fast_farthest_point_sampling_with_owners(points, k, start)?.0)
+}
+
+/// [`fast_farthest_point_sampling`], and for every input point the position in the selection of
+/// its nearest selected point (ties to the earlier one, as [`SpatialIndex::knn`] orders them;
+/// a selected point owns itself unless an earlier one coincides with it): the Voronoi
+/// assignment FPS has computed by its last step, which [`crate::centroidal_relaxation_indexed`]
+/// takes instead of a k-NN pass of its own. `(indices: #k, owners: #N)`.
+///
+/// ```
+/// use meshgnn_graph::{FpsStart, fast_farthest_point_sampling_with_owners};
+/// let points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 0.0, 0.0], [6.0, 0.0, 0.0]];
+/// let (kept, owners) = fast_farthest_point_sampling_with_owners(&points, 2, FpsStart::Index(0))?;
+/// assert_eq!(kept, vec![0, 3]);
+/// assert_eq!(owners, vec![0, 0, 1, 1]);
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn fast_farthest_point_sampling_with_owners(
+    points: &[[f32; 3]],
+    k: usize,
+    start: FpsStart,
+) -> Result<(Vec<u32>, Vec<u32>)> {
     let n = check_fps_input(points.as_flattened(), 3, k)?;
     if k == 0 {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), vec![0; n]));
     }
     let first = start.resolve(n)?;
     let tree = SpatialIndex::with_leaf_size(points, LEAF_SIZE)?;
@@ -113,19 +139,32 @@ pub fn fast_farthest_point_sampling(
         tree: &tree,
         dist: vec![f32::INFINITY; n],
         node_max: vec![(f32::INFINITY, 0); tree.nodes().len()],
+        owner: vec![0; n],
     };
     let mut selected = Vec::with_capacity(k);
     let mut current = first;
     selected.push(current);
-    while selected.len() < k {
-        let slot = slot_of[current as usize];
-        state.dist[slot as usize] = SELECTED;
-        let q = tree.slot_points()[slot as usize];
-        state.update(0, &q, slot);
+    loop {
+        let position = (selected.len() - 1) as u32;
+        let slot = slot_of[current as usize] as usize;
+        // a selected point coinciding with an earlier one stays that one's (distance 0, tie)
+        if state.dist[slot] != 0.0 {
+            state.owner[slot] = position;
+        }
+        state.dist[slot] = SELECTED;
+        let q = tree.slot_points()[slot];
+        state.update(0, &q, slot as u32, position);
+        if selected.len() == k {
+            break;
+        }
         current = state.node_max[0].1;
         selected.push(current);
     }
-    Ok(selected)
+    let mut owners = vec![0u32; n];
+    for (&id, &o) in tree.slot_ids().iter().zip(&state.owner) {
+        owners[id as usize] = o;
+    }
+    Ok((selected, owners))
 }
 
 /// [`fast_farthest_point_sampling`] of many clouds, parallel across clouds: `clouds[b]: #N_b×3`,

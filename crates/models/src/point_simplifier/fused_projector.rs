@@ -65,14 +65,14 @@ impl HostAffine {
     }
 
     /// `y = W x + b` for one row: `x: #C_in`, `y: #C_out` (overwritten).
-    #[inline]
+    #[inline(always)]
     fn apply(&self, x: &[f32], y: &mut [f32]) {
         y.copy_from_slice(&self.bias);
         self.accumulate(x, y);
     }
 
     /// `y += W x` for one row: `x: #C_in`, `y: #C_out`.
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, x: &[f32], y: &mut [f32]) {
         for (tile, y_tile) in self
             .packed
@@ -144,6 +144,9 @@ impl FusedProjector {
             .chain([3, out])
             .max()
             .unwrap_or(out);
+        // The row loops are compiled once per instruction set and dispatched at run time (AVX2
+        // where the CPU has it): the same arithmetic in the same order, in wider registers.
+        let arch = pulp::Arch::new();
         // point-wise layers, fused per row
         let mut features = vec![0.0f32; n * c];
         features
@@ -151,21 +154,13 @@ impl FusedProjector {
             .zip(points.par_chunks(CHUNK))
             .for_each_init(
                 || (vec![0.0f32; scratch], vec![0.0f32; scratch]),
-                |(a, b), (rows, pts)| {
-                    for (row, p) in rows.chunks_exact_mut(c.max(1)).zip(pts) {
-                        let mut width = 3;
-                        a[..3].copy_from_slice(p);
-                        for layer in &self.layers {
-                            let y = &mut b[..layer.output];
-                            layer.apply(&a[..width], y);
-                            for v in y.iter_mut() {
-                                *v = v.max(0.0);
-                            }
-                            width = layer.output;
-                            std::mem::swap(a, b);
-                        }
-                        row.copy_from_slice(&a[..c]);
-                    }
+                |(a, b), (rows, points)| {
+                    arch.dispatch(PointwiseRows {
+                        layers: &self.layers,
+                        points,
+                        rows,
+                        scratch: (a, b),
+                    })
                 },
             );
         // eq. 5.4: the neighbour mean, then ReLU(W_c f + b + W_n mean) in place
@@ -174,21 +169,79 @@ impl FusedProjector {
             .zip(features.par_chunks(CHUNK * c.max(1)))
             .for_each_init(
                 || vec![0.0f32; c],
-                |m, (rows, f_rows)| {
-                    for (row, f) in rows
-                        .chunks_exact_mut(c.max(1))
-                        .zip(f_rows.chunks_exact(c.max(1)))
-                    {
-                        m.copy_from_slice(row);
-                        self.centre.apply(f, row);
-                        self.neighbour.accumulate(m, row);
-                        for v in row.iter_mut() {
-                            *v = v.max(0.0);
-                        }
-                    }
+                |copy, (rows, features)| {
+                    arch.dispatch(GnnRows {
+                        projector: self,
+                        features,
+                        rows,
+                        copy,
+                    })
                 },
             );
         Ok(mean)
+    }
+}
+
+/// The point-wise layers (then ReLU) on a chunk of points: `rows: #chunk × C` written from
+/// `points`, with two scratch rows.
+struct PointwiseRows<'a> {
+    layers: &'a [HostAffine],
+    points: &'a [[f32; 3]],
+    rows: &'a mut [f32],
+    scratch: (&'a mut Vec<f32>, &'a mut Vec<f32>),
+}
+
+impl pulp::WithSimd for PointwiseRows<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let (a, b) = self.scratch;
+        let c = self.layers.last().map_or(3, |l| l.output).max(1);
+        for (row, p) in self.rows.chunks_exact_mut(c).zip(self.points) {
+            let mut width = 3;
+            a[..3].copy_from_slice(p);
+            for layer in self.layers {
+                let y = &mut b[..layer.output];
+                layer.apply(&a[..width], y);
+                for v in y.iter_mut() {
+                    *v = v.max(0.0);
+                }
+                width = layer.output;
+                std::mem::swap(a, b);
+            }
+            row.copy_from_slice(&a[..c]);
+        }
+    }
+}
+
+/// Eq. 5.4 on a chunk of points, in place: `rows` holds the neighbour means on entry and
+/// `ReLU(W_c f + b + W_n mean)` on exit; `copy` is one scratch row.
+struct GnnRows<'a> {
+    projector: &'a FusedProjector,
+    features: &'a [f32],
+    rows: &'a mut [f32],
+    copy: &'a mut Vec<f32>,
+}
+
+impl pulp::WithSimd for GnnRows<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let c = self.copy.len().max(1);
+        for (row, f) in self
+            .rows
+            .chunks_exact_mut(c)
+            .zip(self.features.chunks_exact(c))
+        {
+            self.copy.copy_from_slice(row);
+            self.projector.centre.apply(f, row);
+            self.projector.neighbour.accumulate(self.copy, row);
+            for v in row.iter_mut() {
+                *v = v.max(0.0);
+            }
+        }
     }
 }
 

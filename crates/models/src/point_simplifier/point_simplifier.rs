@@ -16,7 +16,10 @@ use std::time::{Duration, Instant};
 
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
-use meshgnn_graph::{FpsStart, centroidal_relaxation_indexed, fast_farthest_point_sampling};
+use meshgnn_graph::{
+    FpsStart, centroidal_relaxation_indexed, fast_farthest_point_sampling,
+    fast_farthest_point_sampling_with_owners,
+};
 
 use super::fused_projector::FusedProjector;
 use super::{
@@ -317,12 +320,20 @@ impl PointSimplifier {
             SelectorSpace::Position => {
                 fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?
             }
-            SelectorSpace::Centroidal => centroidal_relaxation_indexed(
-                points,
-                graph.knn_index(),
-                &fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?,
-                CENTROIDAL_STEPS,
-            )?,
+            SelectorSpace::Centroidal => {
+                let (fps, owners) = fast_farthest_point_sampling_with_owners(
+                    points,
+                    target,
+                    FpsStart::Seeded(seed),
+                )?;
+                centroidal_relaxation_indexed(
+                    points,
+                    graph.knn_index(),
+                    &fps,
+                    Some(&owners),
+                    CENTROIDAL_STEPS,
+                )?
+            }
         };
         let t2 = Instant::now();
         let rgraph = match graph.knn_index() {
