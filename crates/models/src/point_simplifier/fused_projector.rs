@@ -157,6 +157,7 @@ impl FusedProjector {
                 |(a, b), (rows, points)| {
                     arch.dispatch(PointwiseRows {
                         layers: &self.layers,
+                        channels: c,
                         points,
                         rows,
                         scratch: (a, b),
@@ -172,6 +173,7 @@ impl FusedProjector {
                 |copy, (rows, features)| {
                     arch.dispatch(GnnRows {
                         projector: self,
+                        channels: c,
                         features,
                         rows,
                         copy,
@@ -182,10 +184,11 @@ impl FusedProjector {
     }
 }
 
-/// The point-wise layers (then ReLU) on a chunk of points: `rows: #chunk × C` written from
-/// `points`, with two scratch rows.
+/// The point-wise layers (then ReLU) on a chunk of points: `rows: #chunk × channels` written
+/// from `points`, with two scratch rows.
 struct PointwiseRows<'a> {
     layers: &'a [HostAffine],
+    channels: usize,
     points: &'a [[f32; 3]],
     rows: &'a mut [f32],
     scratch: (&'a mut Vec<f32>, &'a mut Vec<f32>),
@@ -197,7 +200,7 @@ impl pulp::WithSimd for PointwiseRows<'_> {
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let (a, b) = self.scratch;
-        let c = self.layers.last().map_or(3, |l| l.output).max(1);
+        let c = self.channels.max(1);
         for (row, p) in self.rows.chunks_exact_mut(c).zip(self.points) {
             let mut width = 3;
             a[..3].copy_from_slice(p);
@@ -216,9 +219,10 @@ impl pulp::WithSimd for PointwiseRows<'_> {
 }
 
 /// Eq. 5.4 on a chunk of points, in place: `rows` holds the neighbour means on entry and
-/// `ReLU(W_c f + b + W_n mean)` on exit; `copy` is one scratch row.
+/// `ReLU(W_c f + b + W_n mean)` on exit, `channels` wide; `copy` is one scratch row.
 struct GnnRows<'a> {
     projector: &'a FusedProjector,
+    channels: usize,
     features: &'a [f32],
     rows: &'a mut [f32],
     copy: &'a mut Vec<f32>,
@@ -229,7 +233,7 @@ impl pulp::WithSimd for GnnRows<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        let c = self.copy.len().max(1);
+        let c = self.channels.max(1);
         for (row, f) in self
             .rows
             .chunks_exact_mut(c)

@@ -262,9 +262,9 @@ impl PointSimplifier {
     }
 
     /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
-    /// keeps `target` points (`1 ≤ target ≤ N`) chosen by latent FPS (`selection`, `seed`) and
-    /// refined by AttRef (positional FPS when the config's selector says so). A `graph` built by [`NeighbourIndex::from_knn_index`] over these
-    /// `points` lends its kd-tree to AttRef's queries. Errors on a bad target, a graph over a
+    /// keeps `target` points (`1 ≤ target ≤ N`) chosen by the config's selector (`selection`,
+    /// `seed`) and refined by AttRef. A `graph` built by [`NeighbourIndex::from_knn_index`] over
+    /// these `points` lends its kd-tree to the Lloyd steps and AttRef's queries. Errors on a bad target, a graph over a
     /// different N or non-finite points.
     pub fn forward(
         &self,
