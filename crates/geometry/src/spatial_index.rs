@@ -50,6 +50,12 @@ use crate::tri_mesh::check_finite;
 /// Leaf size for k-NN and radius queries (a common choice for k ≈ 7-20; not tuned).
 pub const DEFAULT_LEAF_SIZE: usize = 16;
 
+/// Candidate leaves beyond which a leaf's k-NN rows fall back to one tree walk per point.
+const LEAF_BATCH_CANDIDATES: usize = 64;
+
+/// Consecutive queries of [`SpatialIndex::nearest_within_each`] that share one tree walk.
+const QUERY_BLOCK: usize = 32;
+
 /// Subtrees smaller than this are partitioned on the current thread.
 const PARALLEL_PARTITION: usize = 1 << 14;
 
@@ -81,6 +87,24 @@ pub fn box_squared_distance(q: &[f32; 3], lo: &[f32; 3], hi: &[f32; 3]) -> f32 {
             lo[a] - q[a]
         } else if q[a] > hi[a] {
             q[a] - hi[a]
+        } else {
+            0.0
+        }
+    };
+    let (gx, gy, gz) = (gap(0), gap(1), gap(2));
+    gx * gx + gy * gy + gz * gz
+}
+
+/// The squared distance between the boxes of two nodes: a lower bound of
+/// [`squared_distance`] between any point of one and any point of the other (per-axis gaps
+/// never exceed the coordinate differences they bound, and the operations are monotonic).
+#[inline]
+fn box_box_squared_distance(a: &SpatialNode, b: &SpatialNode) -> f32 {
+    let gap = |i: usize| {
+        if b.lo[i] > a.hi[i] {
+            b.lo[i] - a.hi[i]
+        } else if a.lo[i] > b.hi[i] {
+            a.lo[i] - b.hi[i]
         } else {
             0.0
         }
@@ -350,22 +374,7 @@ impl SpatialIndex {
     /// of the degenerate-input tests).
     fn nearest_in(&self, node: usize, query: &Query<'_>, out: &mut Vec<(f32, u32)>) -> usize {
         if node >= self.first_leaf {
-            let nd = self.nodes[node];
-            let (s, e) = (nd.start as usize, nd.end as usize);
-            for (p, &id) in self.points[s..e].iter().zip(&self.ids[s..e]) {
-                if Some(id) == query.exclude {
-                    continue;
-                }
-                let candidate = (squared_distance(p, query.q), id);
-                if !less(candidate, query.worst(out)) {
-                    continue;
-                }
-                if out.len() == query.k {
-                    out.pop();
-                }
-                let pos = out.partition_point(|&x| less(x, candidate));
-                out.insert(pos, candidate);
-            }
+            self.scan_leaf(node, query, out);
             return 1;
         }
         let (l, r) = (2 * node + 1, 2 * node + 2);
@@ -389,6 +398,131 @@ impl SpatialIndex {
             leaves += self.nearest_in(second, query, out);
         }
         leaves
+    }
+
+    /// Offers every point of leaf `leaf` to `out`, the sorted `k` best so far.
+    #[inline]
+    fn scan_leaf(&self, leaf: usize, query: &Query<'_>, out: &mut Vec<(f32, u32)>) {
+        let nd = self.nodes[leaf];
+        let (s, e) = (nd.start as usize, nd.end as usize);
+        let mut worst = query.worst(out);
+        for (p, &id) in self.points[s..e].iter().zip(&self.ids[s..e]) {
+            let candidate = (squared_distance(p, query.q), id);
+            // the common case first: farther than the current worst
+            if candidate.0 > worst.0 || !less(candidate, worst) || Some(id) == query.exclude {
+                continue;
+            }
+            insert_sorted(out, query.k, candidate);
+            worst = query.worst(out);
+        }
+    }
+
+    /// The k-NN graph rows of the points of leaf `leaf` whose slot is `wanted` (slot order),
+    /// into `indices` and `squared_distances` (`#wanted×k` each): exactly what
+    /// [`SpatialIndex::nearest`] finds, with one tree walk per leaf instead of one per point.
+    /// Every query first takes its `k` best inside its own leaf; the worst of those over the
+    /// leaf bounds which other leaves can hold a better neighbour (box-to-box distance and
+    /// smallest index: the per-query pruning rule applied to the whole leaf at once), and each
+    /// query then scans only those, still skipping the ones its own bound rules out. A leaf
+    /// with at most `k` points, or with more than [`LEAF_BATCH_CANDIDATES`] candidate leaves
+    /// (duplicates piled up), falls back to the per-point search, so the cost never exceeds it
+    /// by more than that scan.
+    fn leaf_knn_rows(
+        &self,
+        leaf: usize,
+        wanted: &[bool],
+        k: usize,
+        indices: &mut [u32],
+        squared_distances: &mut [f32],
+        scratch: &mut LeafScratch,
+    ) {
+        let nd = self.nodes[leaf];
+        let all = nd.start as usize..nd.end as usize;
+        let LeafScratch {
+            found,
+            rows,
+            candidates,
+            others,
+            distances,
+        } = scratch;
+        let query = |slot: usize| Query {
+            q: &self.points[slot],
+            k,
+            radius2: f32::INFINITY,
+            exclude: Some(self.ids[slot]),
+        };
+        let queries = || all.clone().filter(|&slot| wanted[slot]);
+        rows.clear();
+        let mut bound = (f32::NEG_INFINITY, 0u32);
+        let mut batched = all.len() > k;
+        if batched {
+            for slot in queries() {
+                let query = query(slot);
+                found.clear();
+                self.scan_leaf(leaf, &query, found);
+                let worst = query.worst(found);
+                if less(bound, worst) {
+                    bound = worst;
+                }
+                rows.extend_from_slice(found);
+            }
+            candidates.clear();
+            batched = self.collect_leaves(0, &nd, bound, candidates);
+        }
+        if batched {
+            // the other candidate leaves' points, coordinates apart (the distance loop below
+            // then runs in vector registers)
+            others.clear();
+            for &c in candidates.iter().filter(|&&c| c != leaf) {
+                let cn = &self.nodes[c];
+                let range = cn.start as usize..cn.end as usize;
+                for (p, &id) in self.points[range.clone()].iter().zip(&self.ids[range]) {
+                    others.push(p, id);
+                }
+            }
+        }
+        for (row, slot) in queries().enumerate() {
+            let query = query(slot);
+            found.clear();
+            if batched {
+                found.extend_from_slice(&rows[row * k..(row + 1) * k]);
+                others.offer_all(&query, distances, found);
+            } else {
+                self.nearest_in(0, &query, found);
+            }
+            let span = row * k..(row + 1) * k;
+            for ((i, d), &(fd, fi)) in indices[span.clone()]
+                .iter_mut()
+                .zip(&mut squared_distances[span])
+                .zip(found.iter())
+            {
+                *i = fi;
+                *d = fd;
+            }
+        }
+    }
+
+    /// Pushes onto `out` the leaves below `node` whose `(box-to-box distance to `from`,
+    /// smallest index)` precedes `bound`; false (and `out` incomplete) once more than
+    /// [`LEAF_BATCH_CANDIDATES`] qualify.
+    fn collect_leaves(
+        &self,
+        node: usize,
+        from: &SpatialNode,
+        bound: (f32, u32),
+        out: &mut Vec<usize>,
+    ) -> bool {
+        let nd = &self.nodes[node];
+        let key = (box_box_squared_distance(from, nd), nd.min_id);
+        if !less(key, bound) {
+            return true;
+        }
+        if node >= self.first_leaf {
+            out.push(node);
+            return out.len() <= LEAF_BATCH_CANDIDATES;
+        }
+        self.collect_leaves(2 * node + 1, from, bound, out)
+            && self.collect_leaves(2 * node + 2, from, bound, out)
     }
 
     /// Every point with squared distance `<= radius2` from `q` (original index `exclude`
@@ -524,6 +658,23 @@ impl SpatialIndex {
     /// # Ok::<(), meshgnn_geometry::Error>(())
     /// ```
     pub fn knn_graph(&self, k: usize) -> Result<Neighbours> {
+        let all: Vec<u32> = (0..self.len() as u32).collect();
+        self.knn_rows(&all, k)
+    }
+
+    /// The rows of [`SpatialIndex::knn_graph`] for the indexed points `ids` only (distinct
+    /// original indices), `#ids×k`, row `i` for point `ids[i]`: what a model that reads the
+    /// graph at some points needs, at a cost proportional to them. Errors when `k == 0`,
+    /// `k >= #P`, or an id is out of range or repeated.
+    ///
+    /// ```
+    /// use meshgnn_geometry::SpatialIndex;
+    /// let index = SpatialIndex::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]])?;
+    /// assert_eq!(index.knn_rows(&[2, 0], 1)?.indices, vec![1, 1]);
+    /// assert!(index.knn_rows(&[0, 0], 1).is_err());
+    /// # Ok::<(), meshgnn_geometry::Error>(())
+    /// ```
+    pub fn knn_rows(&self, ids: &[u32], k: usize) -> Result<Neighbours> {
         let n = self.len();
         if k == 0 || k >= n {
             return Err(Error::InvalidParameter {
@@ -531,21 +682,44 @@ impl SpatialIndex {
                 message: format!("must be in 1..{n} for {n} points, got {k}"),
             });
         }
-        // Queries run in slot order (neighbouring queries share tree paths and cache lines),
-        // then rows move to their original positions.
-        let by_slot = self.run_queries(&self.points, k, Some(&self.ids));
         let mut slot_of = vec![0u32; n];
         for (slot, &id) in self.ids.iter().enumerate() {
             slot_of[id as usize] = slot as u32;
         }
-        let mut indices = vec![0u32; n * k];
-        let mut squared_distances = vec![0f32; n * k];
+        let mut wanted = vec![false; n];
+        for &id in ids {
+            let slot = slot_of
+                .get(id as usize)
+                .ok_or_else(|| Error::InvalidParameter {
+                    name: "ids",
+                    message: format!("point {id} is outside the {n} indexed"),
+                })?;
+            let w = &mut wanted[*slot as usize];
+            if *w {
+                return Err(Error::InvalidParameter {
+                    name: "ids",
+                    message: format!("point {id} is asked twice"),
+                });
+            }
+            *w = true;
+        }
+        // Rows are computed leaf by leaf in slot order, then move to the order of `ids`.
+        let by_slot = self.knn_rows_by_slot(&wanted, ids.len(), k);
+        let mut compact_of_slot = vec![0u32; n];
+        let mut next = 0u32;
+        for (c, &w) in compact_of_slot.iter_mut().zip(&wanted) {
+            *c = next;
+            next += u32::from(w);
+        }
+        let mut indices = vec![0u32; ids.len() * k];
+        let mut squared_distances = vec![0f32; ids.len() * k];
         indices
             .par_chunks_mut(k)
             .zip(squared_distances.par_chunks_mut(k))
-            .zip(slot_of.par_iter())
-            .for_each(|((idx, dist), &slot)| {
-                let from = slot as usize * k..(slot as usize + 1) * k;
+            .zip(ids.par_iter())
+            .for_each(|((idx, dist), &id)| {
+                let row = compact_of_slot[slot_of[id as usize] as usize] as usize;
+                let from = row * k..(row + 1) * k;
                 idx.copy_from_slice(&by_slot.indices[from.clone()]);
                 dist.copy_from_slice(&by_slot.squared_distances[from]);
             });
@@ -554,6 +728,139 @@ impl SpatialIndex {
             indices,
             squared_distances,
         })
+    }
+
+    /// The k-NN rows of the `count` `wanted` slots, in slot order, leaves in parallel.
+    fn knn_rows_by_slot(&self, wanted: &[bool], count: usize, k: usize) -> Neighbours {
+        let mut indices = vec![0u32; count * k];
+        let mut squared_distances = vec![0f32; count * k];
+        let mut chunks = Vec::with_capacity(self.nodes.len() - self.first_leaf);
+        let (mut idx_rest, mut dist_rest) =
+            (indices.as_mut_slice(), squared_distances.as_mut_slice());
+        for leaf in self.first_leaf..self.nodes.len() {
+            let nd = &self.nodes[leaf];
+            let rows = wanted[nd.start as usize..nd.end as usize]
+                .iter()
+                .filter(|&&w| w)
+                .count();
+            if rows == 0 {
+                continue;
+            }
+            let (idx, idx_tail) = idx_rest.split_at_mut(rows * k);
+            let (dist, dist_tail) = dist_rest.split_at_mut(rows * k);
+            chunks.push((leaf, idx, dist));
+            (idx_rest, dist_rest) = (idx_tail, dist_tail);
+        }
+        chunks
+            .into_par_iter()
+            .for_each_init(LeafScratch::default, |scratch, (leaf, idx, dist)| {
+                self.leaf_knn_rows(leaf, wanted, k, idx, dist, scratch);
+            });
+        Neighbours {
+            k,
+            indices,
+            squared_distances,
+        }
+    }
+
+    /// For each of `queries: #Q×3`, its nearest indexed point within squared distance
+    /// `radii2[i]` (inclusive; ties to the smaller index), `None` when there is none: the
+    /// first result of [`SpatialIndex::nearest_within`] with k = 1, for many queries. Runs of
+    /// 32 consecutive queries share one tree walk (the leaves within the largest radius of
+    /// their bounding box) and scan those leaves' points with vector arithmetic, so queries
+    /// in spatial order with tight radii (a Lloyd step's previous owner, say) cost a few
+    /// distance evaluations each; a run whose walk finds more than 64 leaves falls back to one
+    /// walk per query. Errors when the lengths differ or a query or radius is NaN.
+    ///
+    /// ```
+    /// use meshgnn_geometry::SpatialIndex;
+    /// let index = SpatialIndex::new(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])?;
+    /// let q = [[0.9, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 0.0, 0.0]];
+    /// assert_eq!(index.nearest_within_each(&q, &[1.0, 1.0, 1.0])?, vec![Some(0), Some(0), None]);
+    /// # Ok::<(), meshgnn_geometry::Error>(())
+    /// ```
+    pub fn nearest_within_each(
+        &self,
+        queries: &[[f32; 3]],
+        radii2: &[f32],
+    ) -> Result<Vec<Option<u32>>> {
+        if radii2.len() != queries.len() {
+            return Err(Error::InvalidParameter {
+                name: "radii2",
+                message: format!("{} radii for {} queries", radii2.len(), queries.len()),
+            });
+        }
+        check_finite("query", queries)?;
+        if let Some(i) = radii2.iter().position(|r| r.is_nan()) {
+            return Err(Error::InvalidParameter {
+                name: "radii2",
+                message: format!("radius {i} is NaN"),
+            });
+        }
+        let mut nearest = vec![None; queries.len()];
+        nearest
+            .par_chunks_mut(QUERY_BLOCK)
+            .zip(queries.par_chunks(QUERY_BLOCK))
+            .zip(radii2.par_chunks(QUERY_BLOCK))
+            .for_each_init(
+                || {
+                    (
+                        Vec::new(),
+                        CandidatePoints::default(),
+                        Vec::new(),
+                        Vec::new(),
+                    )
+                },
+                |(candidates, others, distances, found), ((out, queries), radii2)| {
+                    if self.is_empty() {
+                        return;
+                    }
+                    let mut block = SpatialNode {
+                        lo: [f32::INFINITY; 3],
+                        hi: [f32::NEG_INFINITY; 3],
+                        start: 0,
+                        end: 0,
+                        min_id: 0,
+                    };
+                    for q in queries {
+                        for ((lo, hi), &x) in block.lo.iter_mut().zip(&mut block.hi).zip(q) {
+                            *lo = lo.min(x);
+                            *hi = hi.max(x);
+                        }
+                    }
+                    let radius = radii2.iter().fold(f32::NEG_INFINITY, |m, &r| m.max(r));
+                    candidates.clear();
+                    // inclusive radius: any index precedes u32::MAX
+                    let batched = self.collect_leaves(0, &block, (radius, u32::MAX), candidates);
+                    if batched {
+                        others.clear();
+                        for &c in candidates.iter() {
+                            let cn = &self.nodes[c];
+                            let range = cn.start as usize..cn.end as usize;
+                            for (p, &id) in self.points[range.clone()].iter().zip(&self.ids[range])
+                            {
+                                others.push(p, id);
+                            }
+                        }
+                    }
+                    for ((slot, q), &radius2) in out.iter_mut().zip(queries).zip(radii2) {
+                        let query = Query {
+                            q,
+                            k: 1,
+                            radius2,
+                            exclude: None,
+                        };
+                        found.clear();
+                        if batched {
+                            others.offer_all(&query, distances, found);
+                        } else {
+                            self.nearest_in(0, &query, found);
+                        }
+                        *slot = found.first().map(|&(_, id)| id);
+                    }
+                },
+            );
+        Ok(nearest)
     }
 
     /// For each of `queries: #Q×3`, its `k` nearest indexed points, `#Q×k`, in parallel (a
@@ -577,28 +884,25 @@ impl SpatialIndex {
             });
         }
         check_finite("query", queries)?;
-        Ok(self.run_queries(queries, k, None))
+        Ok(self.run_queries(queries, k))
     }
 
-    /// One k-NN query per row of `queries`, in parallel; with `exclude_ids`, query `i` skips
-    /// original index `exclude_ids[i]`. Every query finds `k` results (callers checked `k`).
-    fn run_queries(
-        &self,
-        queries: &[[f32; 3]],
-        k: usize,
-        exclude_ids: Option<&[u32]>,
-    ) -> Neighbours {
-        let mut indices = vec![0u32; queries.len() * k];
-        let mut squared_distances = vec![0.0f32; queries.len() * k];
-        indices
+    /// One k-NN query per row of `queries`, in parallel. Every query finds `k` results
+    /// (callers checked `k`). Queries run in the Morton order of their cell in the index's
+    /// box ([`morton_order`]), so that neighbouring queries share the tree's paths in cache
+    /// whatever order the caller keeps them in; each row still lands at its query's position.
+    fn run_queries(&self, queries: &[[f32; 3]], k: usize) -> Neighbours {
+        let order = morton_order(queries, &self.nodes[0]);
+        let mut by_order_idx = vec![0u32; queries.len() * k];
+        let mut by_order_dist = vec![0.0f32; queries.len() * k];
+        by_order_idx
             .par_chunks_mut(k)
-            .zip(squared_distances.par_chunks_mut(k))
-            .enumerate()
+            .zip(by_order_dist.par_chunks_mut(k))
+            .zip(order.par_iter())
             .for_each_init(
                 || Vec::with_capacity(k + 1),
-                |found, (i, (idx, dist))| {
-                    let exclude = exclude_ids.and_then(|ids| ids.get(i).copied());
-                    self.nearest(&queries[i], k, exclude, found);
+                |found, ((idx, dist), &q)| {
+                    self.nearest(&queries[q as usize], k, None, found);
                     for ((slot_i, slot_d), &(d, j)) in
                         idx.iter_mut().zip(dist.iter_mut()).zip(found.iter())
                     {
@@ -607,12 +911,147 @@ impl SpatialIndex {
                     }
                 },
             );
+        let mut rank = vec![0u32; queries.len()];
+        for (r, &q) in order.iter().enumerate() {
+            rank[q as usize] = r as u32;
+        }
+        let mut indices = vec![0u32; queries.len() * k];
+        let mut squared_distances = vec![0.0f32; queries.len() * k];
+        indices
+            .par_chunks_mut(k)
+            .zip(squared_distances.par_chunks_mut(k))
+            .zip(rank.par_iter())
+            .for_each(|((idx, dist), &r)| {
+                let from = r as usize * k..(r as usize + 1) * k;
+                idx.copy_from_slice(&by_order_idx[from.clone()]);
+                dist.copy_from_slice(&by_order_dist[from]);
+            });
         Neighbours {
             k,
             indices,
             squared_distances,
         }
     }
+}
+
+/// The positions of `queries` sorted by the Morton (Z-order) code of their cell in a
+/// `1024³` grid over the box of `root` (points outside it clamp to its faces), ties by
+/// position: a spatially coherent order computed in `O(Q log Q)`.
+fn morton_order(queries: &[[f32; 3]], root: &SpatialNode) -> Vec<u32> {
+    const BITS: u32 = 10;
+    let cells = ((1u32 << BITS) - 1) as f32;
+    let scale: [f32; 3] =
+        std::array::from_fn(|a| cells / (root.hi[a] - root.lo[a]).max(f32::MIN_POSITIVE));
+    let spread = |mut v: u64| {
+        // the bits of v, three apart
+        v &= 0x3ff;
+        v = (v | v << 16) & 0x0300_00ff;
+        v = (v | v << 8) & 0x0300_f00f;
+        v = (v | v << 4) & 0x030c_30c3;
+        (v | v << 2) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u64, u32)> = queries
+        .par_iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let cell = |a: usize| ((q[a] - root.lo[a]) * scale[a]).clamp(0.0, cells) as u64;
+            (
+                spread(cell(0)) | spread(cell(1)) << 1 | spread(cell(2)) << 2,
+                i as u32,
+            )
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Buffers of [`SpatialIndex::leaf_knn_rows`], reused across the leaves a thread handles.
+#[derive(Default)]
+struct LeafScratch {
+    /// The current query's best so far.
+    found: Vec<(f32, u32)>,
+    /// Each query's `k` best inside its own leaf, `#leaf×k`.
+    rows: Vec<(f32, u32)>,
+    /// The leaves that may hold a neighbour of some query of the leaf.
+    candidates: Vec<usize>,
+    /// The points of the candidate leaves other than the query's own.
+    others: CandidatePoints,
+    /// The current query's squared distance to each of `others`.
+    distances: Vec<f32>,
+}
+
+/// Points with their original indices, one array per coordinate.
+#[derive(Default)]
+struct CandidatePoints {
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    ids: Vec<u32>,
+}
+
+impl CandidatePoints {
+    fn clear(&mut self) {
+        self.xs.clear();
+        self.ys.clear();
+        self.zs.clear();
+        self.ids.clear();
+    }
+
+    fn push(&mut self, p: &[f32; 3], id: u32) {
+        self.xs.push(p[0]);
+        self.ys.push(p[1]);
+        self.zs.push(p[2]);
+        self.ids.push(id);
+    }
+
+    /// Offers every point to `out`, the sorted `k` best so far of `query`: all distances
+    /// first ([`squared_distance`]'s expression, lane by lane), then the few that beat the
+    /// current worst.
+    fn offer_all(&self, query: &Query<'_>, distances: &mut Vec<f32>, out: &mut Vec<(f32, u32)>) {
+        let [qx, qy, qz] = *query.q;
+        distances.clear();
+        distances.extend(
+            self.xs
+                .iter()
+                .zip(&self.ys)
+                .zip(&self.zs)
+                .map(|((&x, &y), &z)| {
+                    let (dx, dy, dz) = (x - qx, y - qy, z - qz);
+                    dx * dx + dy * dy + dz * dz
+                }),
+        );
+        let mut worst = query.worst(out);
+        for (ds, ids) in distances.chunks(8).zip(self.ids.chunks(8)) {
+            // most runs of eight hold nothing nearer than the worst: one vector comparison
+            let w = worst.0;
+            if ds.iter().fold(true, |far, &d| far & (d > w)) {
+                continue;
+            }
+            for (&d, &id) in ds.iter().zip(ids) {
+                if d > worst.0 || !less((d, id), worst) || Some(id) == query.exclude {
+                    continue;
+                }
+                insert_sorted(out, query.k, (d, id));
+                worst = query.worst(out);
+            }
+        }
+    }
+}
+
+/// Inserts `candidate` into `out` (sorted, at most `k`), dropping the worst when full.
+#[inline]
+fn insert_sorted(out: &mut Vec<(f32, u32)>, k: usize, candidate: (f32, u32)) {
+    if out.len() == k {
+        out.pop();
+    }
+    // from the back: `out` is short and sorted
+    out.push(candidate);
+    let mut i = out.len() - 1;
+    while i > 0 && less(candidate, out[i - 1]) {
+        out[i] = out[i - 1];
+        i -= 1;
+    }
+    out[i] = candidate;
 }
 
 /// One k-NN query: the point, how many, the inclusive squared radius, the excluded index.
@@ -826,6 +1265,88 @@ mod tests {
             index.knn(&[[0.0, f32::INFINITY, 0.0]], 1),
             Err(Error::NonFinite { index: 0, .. })
         ));
+    }
+
+    #[test]
+    fn graph_rows_of_a_subset_equal_the_whole_graph_and_brute_force() {
+        // clustered, duplicated and spread points: leaves take the batched route, the dense
+        // duplicate clusters the per-point fallback
+        let mut rng = StdRng::seed_from_u64(9);
+        let mut pts = cloud_with_ties(5, 3000);
+        for i in 0..2000 {
+            let c = [(i % 3) as f32 * 4.0, 1.0, 0.0];
+            pts.push(match i % 4 {
+                0 => c,
+                _ => std::array::from_fn(|a| c[a] + rng.random_range(-0.01f32..0.01)),
+            });
+        }
+        let index = SpatialIndex::new(&pts).unwrap();
+        let all = index.knn_graph(7).unwrap();
+        for (i, p) in pts.iter().enumerate().step_by(7) {
+            let want = brute(&pts, p, 7, Some(i as u32));
+            assert_eq!(
+                all.row(i),
+                want.iter().map(|x| x.1).collect::<Vec<_>>(),
+                "{i}"
+            );
+        }
+        let ids: Vec<u32> = (0..pts.len() as u32).rev().filter(|i| i % 3 != 1).collect();
+        let some = index.knn_rows(&ids, 7).unwrap();
+        for (r, &i) in ids.iter().enumerate() {
+            assert_eq!(some.row(r), all.row(i as usize));
+            assert_eq!(
+                &some.squared_distances[r * 7..(r + 1) * 7],
+                &all.squared_distances[i as usize * 7..(i as usize + 1) * 7]
+            );
+        }
+        // 2000 copies of one point: more than 64 candidate leaves, the per-point route
+        let same = SpatialIndex::new(&[[1.0f32, 2.0, 3.0]; 2000]).unwrap();
+        let rows = same.knn_rows(&[1999, 2], 4).unwrap();
+        assert_eq!(rows.indices, vec![0, 1, 2, 3, 0, 1, 3, 4]);
+        assert!(index.knn_rows(&[], 7).unwrap().is_empty());
+        assert!(index.knn_rows(&[3, 3], 7).is_err());
+        assert!(index.knn_rows(&[pts.len() as u32], 7).is_err());
+        assert!(index.knn_rows(&[0], 0).is_err());
+    }
+
+    #[test]
+    fn bounded_nearest_of_many_equals_one_query_at_a_time() {
+        let pts = cloud_with_ties(6, 2000);
+        let index = SpatialIndex::new(&pts).unwrap();
+        let mut rng = StdRng::seed_from_u64(4);
+        // spatially ordered queries (most of them) and scattered ones, inside and outside
+        let mut queries: Vec<[f32; 3]> = index.slot_points().iter().step_by(3).copied().collect();
+        queries.extend(cloud_with_ties(8, 300).iter().map(|q| q.map(|x| x * 3.0)));
+        let radii: Vec<f32> = queries
+            .iter()
+            .map(|_| rng.random_range(0.0f32..0.05))
+            .collect();
+        let got = index.nearest_within_each(&queries, &radii).unwrap();
+        let mut out = Vec::new();
+        for ((q, &r), g) in queries.iter().zip(&radii).zip(&got) {
+            index.nearest_within(q, 1, r, None, &mut out);
+            assert_eq!(*g, out.first().map(|x| x.1));
+        }
+        assert!(got.iter().any(Option::is_none) && got.iter().any(Option::is_some));
+        assert!(index.nearest_within_each(&queries, &radii[1..]).is_err());
+        assert!(index.nearest_within_each(&[[0.0; 3]], &[f32::NAN]).is_err());
+        let empty = SpatialIndex::new(&[]).unwrap();
+        assert_eq!(
+            empty.nearest_within_each(&[[0.0; 3]], &[1.0]).unwrap(),
+            vec![None]
+        );
+    }
+
+    #[test]
+    fn batch_queries_far_outside_the_index_box_are_answered() {
+        let pts = cloud_with_ties(2, 500);
+        let index = SpatialIndex::new(&pts).unwrap();
+        let queries = [[1e6f32, -1e6, 3.0], [0.1, 0.2, 0.3], [-1e30, 0.0, 1e30]];
+        let got = index.knn(&queries, 4).unwrap();
+        for (i, q) in queries.iter().enumerate() {
+            let want: Vec<u32> = brute(&pts, q, 4, None).iter().map(|x| x.1).collect();
+            assert_eq!(got.row(i), want.as_slice());
+        }
     }
 
     #[test]

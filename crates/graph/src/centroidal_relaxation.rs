@@ -16,7 +16,8 @@
 //! - The result has the length and order of `kept`, stays distinct and depends only on the
 //!   inputs: deterministic, no seed. Cost per step: two k-NN passes, O(N log M + M log N).
 
-use meshgnn_geometry::SpatialIndex;
+use meshgnn_geometry::{SpatialIndex, squared_distance};
+use rayon::prelude::*;
 
 use crate::{Error, Result};
 
@@ -104,18 +105,16 @@ pub fn centroidal_relaxation_indexed(
             &built
         }
     };
+    let mut owner: Vec<u32> = Vec::new();
     for step in 0..steps {
         let centres: Vec<[f32; 3]> = current.iter().map(|&i| points[i as usize]).collect();
-        let assigned;
-        let owner = match owners.filter(|_| step == 0) {
-            Some(owners) => owners,
-            None => {
-                assigned = SpatialIndex::new(&centres)?.knn(points, 1)?.indices;
-                &assigned
-            }
+        owner = match (step, owners) {
+            (0, Some(owners)) => owners.to_vec(),
+            (0, None) => SpatialIndex::new(&centres)?.knn(points, 1)?.indices,
+            _ => nearest_centres(points, &centres, &owner)?,
         };
         let mut sums = vec![[0f64; 4]; current.len()];
-        for (p, &o) in points.iter().zip(owner) {
+        for (p, &o) in points.iter().zip(&owner) {
             let s = &mut sums[o as usize];
             for a in 0..3 {
                 s[a] += f64::from(p[a]);
@@ -143,6 +142,28 @@ pub fn centroidal_relaxation_indexed(
         }
     }
     Ok(current)
+}
+
+/// For each of `points`, the position of its nearest `centres` point (ties to the smaller
+/// position, as [`SpatialIndex::knn`] with k = 1), searched within its distance to the centre
+/// that owned it last step, `previous[i]`: the bound holds the answer and keeps the search
+/// to the centres around each run of points.
+fn nearest_centres(
+    points: &[[f32; 3]],
+    centres: &[[f32; 3]],
+    previous: &[u32],
+) -> Result<Vec<u32>> {
+    let bounds: Vec<f32> = points
+        .par_iter()
+        .zip(previous)
+        .map(|(p, &o)| squared_distance(p, &centres[o as usize]))
+        .collect();
+    let nearest = SpatialIndex::new(centres)?.nearest_within_each(points, &bounds)?;
+    Ok(nearest
+        .into_iter()
+        .zip(previous)
+        .map(|(c, &o)| c.unwrap_or(o))
+        .collect())
 }
 
 /// The input point nearest `q` that is not taken (ties to the smaller index); some point is
@@ -265,6 +286,13 @@ mod tests {
             assert_eq!(
                 centroidal_relaxation_indexed(cloud, None, &kept, Some(&owners), 3).unwrap(),
                 centroidal_relaxation(cloud, &kept, 3).unwrap()
+            );
+            // the later steps' bounded search is the plain nearest-centre assignment, from any
+            // previous owner (here: every point's owner shifted to another centre)
+            let shifted: Vec<u32> = owners.iter().map(|&o| (o + 1) % k as u32).collect();
+            assert_eq!(
+                nearest_centres(cloud, &centres, &shifted).unwrap(),
+                nearest.indices
             );
         }
     }

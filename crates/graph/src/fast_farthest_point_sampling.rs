@@ -125,20 +125,51 @@ pub fn fast_farthest_point_sampling_with_owners(
     k: usize,
     start: FpsStart,
 ) -> Result<(Vec<u32>, Vec<u32>)> {
-    let n = check_fps_input(points.as_flattened(), 3, k)?;
+    check_fps_input(points.as_flattened(), 3, k)?;
+    let tree = SpatialIndex::with_leaf_size(points, LEAF_SIZE)?;
+    fast_farthest_point_sampling_indexed(&tree, k, start)
+}
+
+/// [`fast_farthest_point_sampling_with_owners`] over the points of a [`SpatialIndex`] built
+/// for other queries too (one tree per cloud: the point simplifier's k-NN index): the same
+/// result whatever the index's leaf size. Errors as [`fast_farthest_point_sampling`].
+///
+/// ```
+/// use meshgnn_geometry::SpatialIndex;
+/// use meshgnn_graph::{FpsStart, fast_farthest_point_sampling_indexed};
+/// let points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 0.0, 0.0], [6.0, 0.0, 0.0]];
+/// let index = SpatialIndex::new(&points)?;
+/// let (kept, owners) = fast_farthest_point_sampling_indexed(&index, 2, FpsStart::Index(0))?;
+/// assert_eq!((kept, owners), (vec![0, 3], vec![0, 0, 1, 1]));
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn fast_farthest_point_sampling_indexed(
+    tree: &SpatialIndex,
+    k: usize,
+    start: FpsStart,
+) -> Result<(Vec<u32>, Vec<u32>)> {
+    let n = check_fps_input(tree.slot_points().as_flattened(), 3, k)?;
     if k == 0 {
         return Ok((Vec::new(), vec![0; n]));
     }
     let first = start.resolve(n)?;
-    let tree = SpatialIndex::with_leaf_size(points, LEAF_SIZE)?;
     let mut slot_of = vec![0u32; n];
     for (slot, &id) in tree.slot_ids().iter().enumerate() {
         slot_of[id as usize] = slot as u32;
     }
     let mut state = FpsState {
-        tree: &tree,
+        tree,
         dist: vec![f32::INFINITY; n],
-        node_max: vec![(f32::INFINITY, 0); tree.nodes().len()],
+        // an empty node (a leaf of a tree with leaf size 1) never wins; the others start
+        // unvisited, above every distance
+        node_max: tree
+            .nodes()
+            .iter()
+            .map(|nd| match nd.start == nd.end {
+                true => (f32::NEG_INFINITY, u32::MAX),
+                false => (f32::INFINITY, 0),
+            })
+            .collect(),
         owner: vec![0; n],
     };
     let mut selected = Vec::with_capacity(k);
@@ -254,6 +285,22 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_shared_index_of_any_leaf_size_gives_the_same_selection_and_owners() {
+        for pts in [uniform(4, 6000), clustered(5, 6000), duplicated(6, 3000)] {
+            let want =
+                fast_farthest_point_sampling_with_owners(&pts, 700, FpsStart::Seeded(1)).unwrap();
+            for leaf in [1, 16, 100] {
+                let index = SpatialIndex::with_leaf_size(&pts, leaf).unwrap();
+                let got =
+                    fast_farthest_point_sampling_indexed(&index, 700, FpsStart::Seeded(1)).unwrap();
+                assert_eq!(got, want, "leaf {leaf}");
+            }
+        }
+        let index = SpatialIndex::new(&uniform(1, 10)).unwrap();
+        assert!(fast_farthest_point_sampling_indexed(&index, 11, FpsStart::Index(0)).is_err());
     }
 
     #[test]

@@ -43,7 +43,7 @@ pub use farthest_point_sampling::{
 };
 pub use fast_farthest_point_sampling::{
     fast_farthest_point_sampling, fast_farthest_point_sampling_batch,
-    fast_farthest_point_sampling_with_owners,
+    fast_farthest_point_sampling_indexed, fast_farthest_point_sampling_with_owners,
 };
 pub use k_ring::{k_disk, k_rings};
 pub use knn_graph::{Neighbours, knn_graph, knn_query};

@@ -9,7 +9,8 @@
 use candle_core::Tensor;
 use rayon::prelude::*;
 
-use super::NeighbourIndex;
+use meshgnn_graph::CsrMatrix;
+
 use crate::{Error, Result};
 
 /// Output channels computed together (four 4-lane or two 8-lane vector registers).
@@ -101,56 +102,22 @@ pub(crate) struct FusedProjector {
 }
 
 impl FusedProjector {
-    /// Embeddings `#N × C` (row-major) of `points: #N×3` with their projector `graph`.
-    pub(crate) fn project(&self, points: &[[f32; 3]], graph: &NeighbourIndex) -> Result<Vec<f32>> {
-        let n = points.len();
-        let mut width = 3;
-        for (l, layer) in self.layers.iter().enumerate() {
-            if layer.input != width {
-                return Err(Error::Invalid {
-                    what: format!("projector layer {l}"),
-                    reason: format!("takes {} channels, gets {width}", layer.input),
-                });
-            }
-            width = layer.output;
-        }
-        let c = width;
-        let out = self.centre.output;
-        if self.centre.input != c || self.neighbour.input != c || self.neighbour.output != out {
-            return Err(Error::Invalid {
-                what: "projector GNN".into(),
-                reason: format!(
-                    "maps {}→{} and {}→{} channels after {c}-channel layers",
-                    self.centre.input, out, self.neighbour.input, self.neighbour.output
-                ),
-            });
-        }
-        if out != c {
-            return Err(Error::Invalid {
-                what: "projector GNN".into(),
-                reason: format!("fused inference needs C_out = C_in, got {out} ≠ {c}"),
-            });
-        }
-        if graph.len() != n {
-            return Err(Error::Invalid {
-                what: "projector graph".into(),
-                reason: format!("covers {} points, the cloud has {n}", graph.len()),
-            });
-        }
+    /// The point-wise layers (batch norm folded, ReLU) on every point: `#N × C` row-major.
+    pub(crate) fn pointwise(&self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let c = self.channels()?;
         let scratch = self
             .layers
             .iter()
             .map(|l| l.output)
-            .chain([3, out])
+            .chain([3, c])
             .max()
-            .unwrap_or(out);
+            .unwrap_or(c);
         // The row loops are compiled once per instruction set and dispatched at run time (AVX2
         // where the CPU has it): the same arithmetic in the same order, in wider registers.
         let arch = pulp::Arch::new();
-        // point-wise layers, fused per row
-        let mut features = vec![0.0f32; n * c];
+        let mut features = vec![0.0f32; points.len() * c];
         features
-            .par_chunks_mut(CHUNK * c.max(1))
+            .par_chunks_mut(CHUNK * c)
             .zip(points.par_chunks(CHUNK))
             .for_each_init(
                 || (vec![0.0f32; scratch], vec![0.0f32; scratch]),
@@ -164,23 +131,96 @@ impl FusedProjector {
                     })
                 },
             );
-        // eq. 5.4: the neighbour mean, then ReLU(W_c f + b + W_n mean) in place
-        let mut mean = graph.mean_matrix().mul_dense(&features, c)?;
-        mean.par_chunks_mut(CHUNK * c.max(1))
-            .zip(features.par_chunks(CHUNK * c.max(1)))
+        Ok(features)
+    }
+
+    /// Eq. 5.4 at the points `rows` (indices into the cloud): their embeddings `#R × C`
+    /// (row-major), from every point's point-wise `features: #N × C` and `mean: #R × N`, the
+    /// rows' part of the projector graph's mean operator
+    /// ([`super::NeighbourIndex::mean_rows`]). Each row is computed the same way whichever
+    /// rows are asked.
+    pub(crate) fn aggregate(
+        &self,
+        features: &[f32],
+        mean: &CsrMatrix,
+        rows: &[u32],
+    ) -> Result<Vec<f32>> {
+        let c = self.channels()?;
+        let n = features.len() / c;
+        if features.len() != n * c || mean.rows() != rows.len() || mean.cols() != n {
+            return Err(Error::Invalid {
+                what: "projector graph".into(),
+                reason: format!(
+                    "a {}×{} mean operator for {} rows of {} features of {c} channels",
+                    mean.rows(),
+                    mean.cols(),
+                    rows.len(),
+                    features.len() as f64 / c as f64
+                ),
+            });
+        }
+        if let Some(&bad) = rows.iter().find(|&&r| r as usize >= n) {
+            return Err(Error::Invalid {
+                what: format!("row {bad}"),
+                reason: format!("out of range for {n} points"),
+            });
+        }
+        let arch = pulp::Arch::new();
+        let mut embeddings = vec![0.0f32; rows.len() * c];
+        embeddings
+            .par_chunks_mut(CHUNK * c)
+            .zip(rows.par_chunks(CHUNK))
+            .enumerate()
             .for_each_init(
-                || vec![0.0f32; c],
-                |copy, (rows, features)| {
+                || (vec![0.0f64; c], vec![0.0f32; c]),
+                |(sum, mean_row), (chunk, (out, centres))| {
                     arch.dispatch(GnnRows {
                         projector: self,
                         channels: c,
                         features,
-                        rows,
-                        copy,
+                        mean_operator: mean,
+                        first_row: chunk * CHUNK,
+                        centres,
+                        rows: out,
+                        scratch: (sum, mean_row),
                     })
                 },
             );
-        Ok(mean)
+        Ok(embeddings)
+    }
+
+    /// The channel count C, after checking that the maps chain: `3 → … → C`, then eq. 5.4's
+    /// `C → C` maps.
+    fn channels(&self) -> Result<usize> {
+        let mut width = 3;
+        for (l, layer) in self.layers.iter().enumerate() {
+            if layer.input != width {
+                return Err(Error::Invalid {
+                    what: format!("projector layer {l}"),
+                    reason: format!("takes {} channels, gets {width}", layer.input),
+                });
+            }
+            width = layer.output;
+        }
+        let c = width;
+        let (centre, neighbour) = (&self.centre, &self.neighbour);
+        if c == 0
+            || [
+                centre.input,
+                centre.output,
+                neighbour.input,
+                neighbour.output,
+            ] != [c; 4]
+        {
+            return Err(Error::Invalid {
+                what: "projector GNN".into(),
+                reason: format!(
+                    "fused inference needs {c}→{c} maps after {c}-channel layers, got {}→{} and {}→{}",
+                    centre.input, centre.output, neighbour.input, neighbour.output
+                ),
+            });
+        }
+        Ok(c)
     }
 }
 
@@ -218,14 +258,19 @@ impl pulp::WithSimd for PointwiseRows<'_> {
     }
 }
 
-/// Eq. 5.4 on a chunk of points, in place: `rows` holds the neighbour means on entry and
-/// `ReLU(W_c f + b + W_n mean)` on exit, `channels` wide; `copy` is one scratch row.
+/// Eq. 5.4 on a chunk of rows: row `r` of `rows` gets `ReLU(W_c f + b + W_n mean)`, where
+/// `f` is row `centres[r]` of `features` and `mean` is row `first_row + r` of `mean_operator`
+/// applied to `features`, summed in `f64` in column order as [`CsrMatrix::mul_dense`] sums;
+/// two scratch rows.
 struct GnnRows<'a> {
     projector: &'a FusedProjector,
     channels: usize,
     features: &'a [f32],
+    mean_operator: &'a CsrMatrix,
+    first_row: usize,
+    centres: &'a [u32],
     rows: &'a mut [f32],
-    copy: &'a mut Vec<f32>,
+    scratch: (&'a mut Vec<f64>, &'a mut Vec<f32>),
 }
 
 impl pulp::WithSimd for GnnRows<'_> {
@@ -234,14 +279,25 @@ impl pulp::WithSimd for GnnRows<'_> {
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let c = self.channels.max(1);
-        for (row, f) in self
-            .rows
-            .chunks_exact_mut(c)
-            .zip(self.features.chunks_exact(c))
-        {
-            self.copy.copy_from_slice(row);
-            self.projector.centre.apply(f, row);
-            self.projector.neighbour.accumulate(self.copy, row);
+        let (sum, mean) = self.scratch;
+        for (r, (row, &centre)) in self.rows.chunks_exact_mut(c).zip(self.centres).enumerate() {
+            sum.fill(0.0);
+            let (cols, vals) = self.mean_operator.row(self.first_row + r);
+            for (&j, &v) in cols.iter().zip(vals) {
+                let start = j as usize * c;
+                let v = f64::from(v);
+                for (a, &x) in sum.iter_mut().zip(&self.features[start..start + c]) {
+                    *a += v * f64::from(x);
+                }
+            }
+            for (m, &a) in mean.iter_mut().zip(sum.iter()) {
+                *m = a as f32;
+            }
+            let start = centre as usize * c;
+            self.projector
+                .centre
+                .apply(&self.features[start..start + c], row);
+            self.projector.neighbour.accumulate(mean, row);
             for v in row.iter_mut() {
                 *v = v.max(0.0);
             }
@@ -252,7 +308,7 @@ impl pulp::WithSimd for GnnRows<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::point_simplifier::PointSimplifier;
+    use crate::point_simplifier::{NeighbourIndex, PointSimplifier};
     use candle_core::{DType, Device};
     use meshgnn_graph::knn_graph;
     use rand::{Rng, SeedableRng, rngs::StdRng};
@@ -285,7 +341,11 @@ mod tests {
             .fused_projector(false)
             .unwrap()
             .expect("plain weights on the CPU take the fused path");
-        let got = fused.project(&points, &graph).unwrap();
+        let features = fused.pointwise(&points).unwrap();
+        let all: Vec<u32> = (0..points.len() as u32).collect();
+        let got = fused
+            .aggregate(&features, graph.mean_matrix().unwrap(), &all)
+            .unwrap();
         let input =
             Tensor::from_slice(points.as_flattened(), (points.len(), 3), &Device::Cpu).unwrap();
         let want: Vec<f32> = model
@@ -312,10 +372,49 @@ mod tests {
     }
 
     #[test]
+    fn rows_asked_alone_equal_the_same_rows_of_all() {
+        // the lazy k-NN graph's rows and the aggregation of a subset: bit for bit the rows of
+        // the full computation
+        let model = crate::pretrained::load::<PointSimplifier>("point_simplifier").unwrap();
+        let fused = model.fused_projector(false).unwrap().unwrap();
+        let mut rng = StdRng::seed_from_u64(8);
+        let points: Vec<[f32; 3]> = (0..3000)
+            .map(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)))
+            .collect();
+        let index = meshgnn_geometry::SpatialIndex::new(&points).unwrap();
+        let lazy = NeighbourIndex::from_knn_index(index, 7, &Device::Cpu).unwrap();
+        let rows: Vec<u32> = (0..3000).filter(|i| i % 5 != 2).rev().collect();
+        let some_mean = lazy.mean_rows(&rows).unwrap();
+        let features = fused.pointwise(&points).unwrap();
+        let some = fused.aggregate(&features, &some_mean, &rows).unwrap();
+        let full_graph =
+            NeighbourIndex::from_knn(&knn_graph(&points, 7).unwrap(), &Device::Cpu).unwrap();
+        let all: Vec<u32> = (0..3000).collect();
+        let full = fused
+            .aggregate(&features, full_graph.mean_matrix().unwrap(), &all)
+            .unwrap();
+        for (r, &i) in rows.iter().enumerate() {
+            assert_eq!(
+                some[r * 64..(r + 1) * 64],
+                full[i as usize * 64..(i as usize + 1) * 64]
+            );
+        }
+        // once every row was read, the lazy graph answers from its full slots: the same rows
+        assert_eq!(
+            lazy.mean_matrix().unwrap(),
+            full_graph.mean_matrix().unwrap()
+        );
+        assert_eq!(lazy.mean_rows(&rows).unwrap(), some_mean);
+    }
+
+    #[test]
     fn fused_projector_rejects_a_graph_over_other_points() {
         let model = crate::pretrained::load::<PointSimplifier>("point_simplifier").unwrap();
         let fused = model.fused_projector(false).unwrap().unwrap();
         let graph = NeighbourIndex::from_rows(&[vec![1], vec![0]], &Device::Cpu).unwrap();
-        assert!(fused.project(&[[0.0; 3]; 3], &graph).is_err());
+        let features = fused.pointwise(&[[0.0; 3]; 3]).unwrap();
+        let mean = graph.mean_matrix().unwrap();
+        assert!(fused.aggregate(&features, mean, &[0, 1]).is_err());
+        assert!(fused.aggregate(&features[..128], mean, &[0, 2]).is_err());
     }
 }

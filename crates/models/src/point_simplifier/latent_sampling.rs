@@ -30,6 +30,7 @@
 
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use rayon::prelude::*;
+use std::ops::Range;
 
 use crate::{Error, Result};
 
@@ -50,8 +51,16 @@ impl Default for LatentSamplingOptions {
 /// Spatial cells: balanced median cuts of `indices` along the longest axis until every cell
 /// holds at most `cell_size` points. Deterministic (ties by index).
 fn split_cells(positions: &[[f32; 3]], mut indices: Vec<u32>, cell_size: usize) -> Vec<Vec<u32>> {
+    order_cells(positions, &mut indices, cell_size);
+    let mut ranges = Vec::new();
+    cell_ranges(0, indices.len(), cell_size, &mut ranges);
+    ranges.into_iter().map(|r| indices[r].to_vec()).collect()
+}
+
+/// Reorders `indices` in place, cell after cell of [`split_cells`]' partition.
+fn order_cells(positions: &[[f32; 3]], indices: &mut [u32], cell_size: usize) {
     if indices.len() <= cell_size {
-        return vec![indices];
+        return;
     }
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
@@ -70,26 +79,30 @@ fn split_cells(positions: &[[f32; 3]], mut indices: Vec<u32>, cell_size: usize) 
         let (ka, kb) = (key(a), key(b));
         ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
     });
-    let right = indices.split_off(mid);
-    let (mut l, r) = rayon::join(
-        || split_cells(positions, indices, cell_size),
-        || split_cells(positions, right, cell_size),
+    let (left, right) = indices.split_at_mut(mid);
+    rayon::join(
+        || order_cells(positions, left, cell_size),
+        || order_cells(positions, right, cell_size),
     );
-    l.extend(r);
-    l
+}
+
+/// The ranges of the cells of [`order_cells`] over `start..start + len`, in order.
+fn cell_ranges(start: usize, len: usize, cell_size: usize, out: &mut Vec<Range<usize>>) {
+    if len <= cell_size {
+        out.push(start..start + len);
+        return;
+    }
+    let mid = len / 2;
+    cell_ranges(start, mid, cell_size, out);
+    cell_ranges(start + mid, len - mid, cell_size, out);
 }
 
 /// The points' indices grouped cell by cell of the partition with `cell_size` (a spatially
 /// coherent order: k-NN queries and gathers in this order stay in cache).
 pub(crate) fn spatial_order(positions: &[[f32; 3]], cell_size: usize) -> Vec<u32> {
-    split_cells(
-        positions,
-        (0..positions.len() as u32).collect(),
-        cell_size.max(1),
-    )
-    .into_iter()
-    .flatten()
-    .collect()
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    order_cells(positions, &mut order, cell_size.max(1));
+    order
 }
 
 /// Shares of `target` proportional to `sizes` (largest remainder, ties by position), each at

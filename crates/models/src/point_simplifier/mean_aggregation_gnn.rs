@@ -79,7 +79,7 @@ impl MeanAggregationGnn {
         } else {
             // no autograd: one parallel sparse product, no N × W × C temporary
             let host: Vec<f32> = features.flatten_all()?.to_vec1()?;
-            let mean = graph.mean_matrix().mul_dense(&host, c)?;
+            let mean = graph.mean_matrix()?.mul_dense(&host, c)?;
             Tensor::from_vec(mean, (n, c), features.device())?
         };
         let out = self
@@ -102,8 +102,8 @@ impl MeanAggregationGnn {
         let mut start = 0;
         while start < n {
             let len = CHUNK.min(n - start);
-            let idx = graph.indices().narrow(0, start * w, len * w)?;
-            let weights = graph.weights().narrow(0, start, len)?;
+            let idx = graph.indices()?.narrow(0, start * w, len * w)?;
+            let weights = graph.weights()?.narrow(0, start, len)?;
             let mean = features
                 .index_select(&idx, 0)?
                 .reshape((len, w, c))?

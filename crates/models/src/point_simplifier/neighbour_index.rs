@@ -9,7 +9,7 @@
 //!   point's own index and weight 0. A point with no neighbour (isolated vertex) gets a zero
 //!   mean, i.e. `f'_i = W_c f_i`.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use candle_core::{Device, Tensor};
 use meshgnn_geometry::SpatialIndex;
@@ -21,14 +21,23 @@ use crate::{Error, Result};
 /// Neighbour slots and mean weights of every point, `indices: (N·W)`, `weights: (N, W, 1)`.
 #[derive(Clone, Debug)]
 pub struct NeighbourIndex {
+    /// The slots of every point: given at construction, or built at first use for a k-NN
+    /// graph over `knn_index` (inference reads only some rows: [`NeighbourIndex::mean_rows`]).
+    slots: OnceLock<Slots>,
+    len: usize,
+    width: usize,
+    device: Device,
+    /// The kd-tree of [`NeighbourIndex::from_knn_index`]: the source of the rows, reused for
+    /// the Lloyd steps and AttRef's eq. 5.5 queries over the same points.
+    knn_index: Option<Arc<SpatialIndex>>,
+}
+
+/// The slot tensors and their sparse mean.
+#[derive(Clone, Debug)]
+struct Slots {
     indices: Tensor,
     weights: Tensor,
     mean: CsrMatrix,
-    len: usize,
-    width: usize,
-    /// The kd-tree the k-NN rows came from, when built by [`NeighbourIndex::from_knn_index`]:
-    /// reused for AttRef's eq. 5.5 queries over the same points.
-    knn_index: Option<Arc<SpatialIndex>>,
 }
 
 impl NeighbourIndex {
@@ -40,7 +49,7 @@ impl NeighbourIndex {
     /// use meshgnn_models::point_simplifier::NeighbourIndex;
     /// let g = NeighbourIndex::from_rows(&[vec![1, 2], vec![0], vec![]], &Device::Cpu)?;
     /// assert_eq!((g.len(), g.width()), (3, 2));
-    /// let w: Vec<f32> = g.weights().flatten_all()?.to_vec1()?;
+    /// let w: Vec<f32> = g.weights()?.flatten_all()?.to_vec1()?;
     /// assert_eq!(w, vec![0.5, 0.5, 1.0, 0.0, 0.0, 0.0]);
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
@@ -95,10 +104,11 @@ impl NeighbourIndex {
         Self::from_flat(neighbours.indices.clone(), vec![w; n * k], n, k, device)
     }
 
-    /// From a prebuilt `index` over the cloud's `#N×3` points: the eq. 5.4 k-NN graph
-    /// (`index.graph(k)`, weights `1/k`), keeping the index so that
-    /// [`super::PointSimplifier::forward`] reuses it for AttRef instead of building a second
-    /// kd-tree over the same points. Errors when `k == 0` or `k >= N`.
+    /// The eq. 5.4 k-NN graph (`k` nearest other points, weights `1/k`) of the points a
+    /// prebuilt `index` holds. Rows are found when first read, and only those read:
+    /// [`NeighbourIndex::mean_rows`] queries just the rows asked, the slot tensors query all.
+    /// The index is kept for [`super::PointSimplifier::forward`]'s other queries over the same
+    /// points. Errors when `k == 0` or `k >= N`.
     ///
     /// ```
     /// use candle_core::Device;
@@ -106,15 +116,26 @@ impl NeighbourIndex {
     /// use meshgnn_models::point_simplifier::NeighbourIndex;
     /// let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
     /// let g = NeighbourIndex::from_knn_index(SpatialIndex::new(&pts)?, 1, &Device::Cpu)?;
-    /// let idx: Vec<u32> = g.indices().to_vec1()?;
+    /// let idx: Vec<u32> = g.indices()?.to_vec1()?;
     /// assert_eq!(idx, vec![1, 0, 1]);
     /// assert_eq!(g.knn_index().map(SpatialIndex::len), Some(3));
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
     pub fn from_knn_index(index: SpatialIndex, k: usize, device: &Device) -> Result<Self> {
-        let mut graph = Self::from_knn(&index.knn_graph(k)?, device)?;
-        graph.knn_index = Some(Arc::new(index));
-        Ok(graph)
+        let n = index.len();
+        if k == 0 || k >= n {
+            return Err(Error::Invalid {
+                what: "k-NN graph".into(),
+                reason: format!("k must be in 1..{n} for {n} points, got {k}"),
+            });
+        }
+        Ok(Self {
+            slots: OnceLock::new(),
+            len: n,
+            width: k,
+            device: device.clone(),
+            knn_index: Some(Arc::new(index)),
+        })
     }
 
     /// The k-NN index kept by [`NeighbourIndex::from_knn_index`] (`None` otherwise).
@@ -136,21 +157,80 @@ impl NeighbourIndex {
         width: usize,
         device: &Device,
     ) -> Result<Self> {
-        let mean = mean_matrix(&indices, &weights, len, width)?;
         Ok(Self {
-            indices: Tensor::from_vec(indices, len * width, device)?,
-            weights: Tensor::from_vec(weights, (len, width, 1), device)?,
-            mean,
+            slots: OnceLock::from(Slots::new(indices, weights, len, width, device)?),
             len,
             width,
+            device: device.clone(),
             knn_index: None,
         })
     }
 
+    /// The slots, built from the k-NN index at first use.
+    fn slots(&self) -> Result<&Slots> {
+        if let Some(slots) = self.slots.get() {
+            return Ok(slots);
+        }
+        let index = self.knn_index.as_deref().ok_or_else(|| Error::Invalid {
+            what: "neighbour index".into(),
+            reason: "has neither slots nor a k-NN index".into(),
+        })?;
+        let k = self.width;
+        let nn = index.knn_graph(k)?;
+        let weights = vec![1.0 / k as f32; nn.indices.len()];
+        let built = Slots::new(nn.indices, weights, self.len, k, &self.device)?;
+        Ok(self.slots.get_or_init(|| built))
+    }
+
     /// The same means as a row-stochastic sparse matrix `#N×#N` (row `i`: `1/|N_i|` at each
     /// neighbour), for inference without autograd: `mean = A · F`.
-    pub fn mean_matrix(&self) -> &CsrMatrix {
-        &self.mean
+    pub fn mean_matrix(&self) -> Result<&CsrMatrix> {
+        Ok(&self.slots()?.mean)
+    }
+
+    /// [`NeighbourIndex::mean_matrix`] restricted to the points `rows` (distinct, each `< N`):
+    /// `#rows × N`, row `r` equal to row `rows[r]` of the full matrix. A k-NN graph whose rows
+    /// were not needed yet queries only these (inference reads the embeddings of the points
+    /// AttRef looks at, not of all).
+    pub fn mean_rows(&self, rows: &[u32]) -> Result<CsrMatrix> {
+        if let (None, Some(index)) = (self.slots.get(), self.knn_index.as_deref()) {
+            // k distinct neighbours per row, weight 1/k: sorting each row is the whole CSR form
+            let k = self.width;
+            let mut columns = index.knn_rows(rows, k)?.indices;
+            columns.par_chunks_mut(k).for_each(<[u32]>::sort_unstable);
+            let offsets = (0..=rows.len()).map(|r| r * k).collect();
+            let weights = vec![1.0 / k as f32; columns.len()];
+            return Ok(CsrMatrix::from_parts(
+                rows.len(),
+                self.len,
+                offsets,
+                columns,
+                weights,
+            )?);
+        }
+        let full = &self.slots()?.mean;
+        let mut offsets = Vec::with_capacity(rows.len() + 1);
+        offsets.push(0);
+        let (mut cols, mut vals) = (Vec::new(), Vec::new());
+        for &r in rows {
+            if r as usize >= self.len {
+                return Err(Error::Invalid {
+                    what: format!("row {r}"),
+                    reason: format!("out of range for {} points", self.len),
+                });
+            }
+            let (c, v) = full.row(r as usize);
+            cols.extend_from_slice(c);
+            vals.extend_from_slice(v);
+            offsets.push(cols.len());
+        }
+        Ok(CsrMatrix::from_parts(
+            rows.len(),
+            self.len,
+            offsets,
+            cols,
+            vals,
+        )?)
     }
 
     /// Number of points N.
@@ -169,19 +249,43 @@ impl NeighbourIndex {
     }
 
     /// Neighbour slots `(N·W)` `u32`.
-    pub fn indices(&self) -> &Tensor {
-        &self.indices
+    pub fn indices(&self) -> Result<&Tensor> {
+        Ok(&self.slots()?.indices)
     }
 
     /// Mean weights `(N, W, 1)`.
-    pub fn weights(&self) -> &Tensor {
-        &self.weights
+    pub fn weights(&self) -> Result<&Tensor> {
+        Ok(&self.slots()?.weights)
     }
 }
 
-/// The CSR form of the slots: real neighbours (weight > 0) sorted by index, duplicates merged.
-fn mean_matrix(indices: &[u32], weights: &[f32], len: usize, width: usize) -> Result<CsrMatrix> {
-    let rows: Vec<Vec<(u32, f32)>> = indices
+impl Slots {
+    fn new(
+        indices: Vec<u32>,
+        weights: Vec<f32>,
+        len: usize,
+        width: usize,
+        device: &Device,
+    ) -> Result<Self> {
+        let mean = mean_matrix(&indices, &weights, len, len, width)?;
+        Ok(Self {
+            indices: Tensor::from_vec(indices, len * width, device)?,
+            weights: Tensor::from_vec(weights, (len, width, 1), device)?,
+            mean,
+        })
+    }
+}
+
+/// The CSR form (`rows × cols`) of `rows` rows of `width` slots: real neighbours (weight > 0)
+/// sorted by index, duplicates merged.
+fn mean_matrix(
+    indices: &[u32],
+    weights: &[f32],
+    rows: usize,
+    cols: usize,
+    width: usize,
+) -> Result<CsrMatrix> {
+    let merged_rows: Vec<Vec<(u32, f32)>> = indices
         .par_chunks(width.max(1))
         .zip(weights.par_chunks(width.max(1)))
         .map(|(idx, w)| {
@@ -202,18 +306,18 @@ fn mean_matrix(indices: &[u32], weights: &[f32], len: usize, width: usize) -> Re
             merged
         })
         .collect();
-    let mut offsets = Vec::with_capacity(len + 1);
+    let mut offsets = Vec::with_capacity(rows + 1);
     offsets.push(0);
-    let mut cols = Vec::with_capacity(indices.len());
+    let mut columns = Vec::with_capacity(indices.len());
     let mut vals = Vec::with_capacity(indices.len());
-    for row in rows {
+    for row in merged_rows {
         for (i, w) in row {
-            cols.push(i);
+            columns.push(i);
             vals.push(w);
         }
-        offsets.push(cols.len());
+        offsets.push(columns.len());
     }
-    Ok(CsrMatrix::from_parts(len, len, offsets, cols, vals)?)
+    Ok(CsrMatrix::from_parts(rows, cols, offsets, columns, vals)?)
 }
 
 #[cfg(test)]
@@ -227,11 +331,17 @@ mod tests {
                 .unwrap();
         let g = NeighbourIndex::from_adjacency(&adj, &Device::Cpu).unwrap();
         assert_eq!(g.width(), 2);
-        let idx: Vec<u32> = g.indices().to_vec1().unwrap();
+        let idx: Vec<u32> = g.indices().unwrap().to_vec1().unwrap();
         assert_eq!(idx, vec![1, 2, 0, 1, 0, 2]);
-        let w: Vec<f32> = g.weights().flatten_all().unwrap().to_vec1().unwrap();
+        let w: Vec<f32> = g
+            .weights()
+            .unwrap()
+            .flatten_all()
+            .unwrap()
+            .to_vec1()
+            .unwrap();
         assert_eq!(w, vec![0.5, 0.5, 1.0, 0.0, 1.0, 0.0]);
-        let a = g.mean_matrix();
+        let a = g.mean_matrix().unwrap();
         assert_eq!(
             (a.get(0, 1), a.get(0, 2), a.get(1, 0), a.get(1, 1)),
             (0.5, 0.5, 1.0, 0.0)

@@ -18,13 +18,13 @@ use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_graph::{
     FpsStart, centroidal_relaxation_indexed, fast_farthest_point_sampling,
-    fast_farthest_point_sampling_with_owners,
+    fast_farthest_point_sampling_indexed, fast_farthest_point_sampling_with_owners,
 };
 
 use super::fused_projector::FusedProjector;
 use super::{
     AttentionRefinement, AttentionRefinementConfig, LatentSamplingOptions, MeanAggregationGnn,
-    NeighbourIndex, PointMlp, latent_farthest_point_sampling, refinement_graph,
+    NeighbourIndex, PointMlp, RefinementGraph, latent_farthest_point_sampling, refinement_graph,
     refinement_graph_indexed,
 };
 use crate::{Error, Result};
@@ -157,7 +157,8 @@ pub struct SimplifierOutput {
     pub points: Tensor,
     /// Indices of the selected centres in the input, `#M`, distinct.
     pub indices: Vec<u32>,
-    /// Stage timings (k-NN left at zero: the graph is an input here).
+    /// Stage timings (k-NN: the rows of a lazy k-NN graph found here; building the graph's
+    /// index is the caller's).
     pub timings: StageTimings,
 }
 
@@ -263,9 +264,10 @@ impl PointSimplifier {
 
     /// The whole model on `points: #N×3` (unit-sphere frame) with its projector `graph`:
     /// keeps `target` points (`1 ≤ target ≤ N`) chosen by the config's selector (`selection`,
-    /// `seed`) and refined by AttRef. A `graph` built by [`NeighbourIndex::from_knn_index`] over
-    /// these `points` lends its kd-tree to the Lloyd steps and AttRef's queries. Errors on a bad target, a graph over a
-    /// different N or non-finite points.
+    /// `seed`) and refined by AttRef. A `graph` built by [`NeighbourIndex::from_knn_index`]
+    /// over these `points` lends its kd-tree to the Lloyd steps and AttRef's queries, and at
+    /// inference only the rows AttRef reads are searched. Errors on a bad target, a graph
+    /// over a different N or non-finite points.
     pub fn forward(
         &self,
         points: &[[f32; 3]],
@@ -294,38 +296,161 @@ impl PointSimplifier {
                 reason: "has a non-finite coordinate".into(),
             });
         }
-        let t0 = Instant::now();
-        let (embeddings, latent) = if let Some(fused) = self.fused_projector(train)? {
-            (None, fused.project(points, graph)?)
-        } else {
-            let input = Tensor::from_slice(points.as_flattened(), (n, 3), &self.device)?;
-            let embeddings = self.project(&input, graph, train)?;
-            let latent: Vec<f32> = embeddings
-                .detach()
-                .to_dtype(DType::F32)?
-                .flatten_all()?
-                .to_vec1()?;
-            (Some(embeddings), latent)
+        let choice = Choice {
+            target,
+            selection,
+            seed,
         };
+        match self.fused_projector(train)? {
+            Some(fused) => self.forward_fused(&fused, points, graph, &choice),
+            None => self.forward_autograd(points, graph, &choice, train),
+        }
+    }
+
+    /// [`PointSimplifier::forward`] through the candle projector (training, trainable or
+    /// non-CPU weights): every point's embedding, differentiable.
+    fn forward_autograd(
+        &self,
+        points: &[[f32; 3]],
+        graph: &NeighbourIndex,
+        choice: &Choice,
+        train: bool,
+    ) -> Result<SimplifierOutput> {
+        let t0 = Instant::now();
+        let input = Tensor::from_slice(points.as_flattened(), (points.len(), 3), &self.device)?;
+        let embeddings = self.project(&input, graph, train)?;
+        let latent: Vec<f32> = embeddings
+            .detach()
+            .to_dtype(DType::F32)?
+            .flatten_all()?
+            .to_vec1()?;
         let t1 = Instant::now();
-        let indices = match self.config.selector {
-            SelectorSpace::Latent => latent_farthest_point_sampling(
-                &latent,
+        let indices = self.select(points, graph, Some(&latent), choice)?;
+        let t2 = Instant::now();
+        let rgraph = self.refinement_graph(points, graph, &indices)?;
+        let displacement = match embeddings.track_op() {
+            true => self.refine.forward(&embeddings, &rgraph)?,
+            false => self
+                .refine
+                .forward_host(&latent, self.config.hidden, &rgraph)?,
+        };
+        Ok(SimplifierOutput {
+            points: rgraph.positions.add(&displacement)?,
+            indices,
+            timings: StageTimings {
+                knn: Duration::ZERO,
+                projector: t1 - t0,
+                selector: t2 - t1,
+                refinement: t2.elapsed(),
+            },
+        })
+    }
+
+    /// [`PointSimplifier::forward`] at inference with the fused projector. The point-wise
+    /// layers run while farthest point sampling (sequential) holds one core; the GNN layer
+    /// runs on the rows the selector needs (the latent selector: all) and those AttRef reads
+    /// (position selectors: the kept points' neighbourhoods, about 70% of the points at 5%).
+    /// Stage times overlap: `projector` counts the point-wise layers in full.
+    fn forward_fused(
+        &self,
+        fused: &FusedProjector,
+        points: &[[f32; 3]],
+        graph: &NeighbourIndex,
+        choice: &Choice,
+    ) -> Result<SimplifierOutput> {
+        let n = points.len();
+        let c = self.config.hidden;
+        let t0 = Instant::now();
+        let mut timings = StageTimings::default();
+        let (indices, latent, features) = if self.config.selector == SelectorSpace::Latent {
+            let features = fused.pointwise(points)?;
+            let all: Vec<u32> = (0..n as u32).collect();
+            let t = Instant::now();
+            let mean = graph.mean_rows(&all)?;
+            timings.knn = t.elapsed();
+            let latent = fused.aggregate(&features, &mean, &all)?;
+            timings.projector = t0.elapsed() - timings.knn;
+            let t = Instant::now();
+            let indices = self.select(points, graph, Some(&latent), choice)?;
+            timings.selector = t.elapsed();
+            (indices, Some(latent), features)
+        } else {
+            let (indices, features) = rayon::join(
+                || {
+                    let t = Instant::now();
+                    let indices = self.select(points, graph, None, choice);
+                    (indices, t.elapsed())
+                },
+                || {
+                    let t = Instant::now();
+                    (fused.pointwise(points), t.elapsed())
+                },
+            );
+            (timings.selector, timings.projector) = (indices.1, features.1);
+            (indices.0?, None, features.0?)
+        };
+        let t2 = Instant::now();
+        let rgraph = self.refinement_graph(points, graph, &indices)?;
+        // the support's embeddings, computed here, count as k-NN and projector time
+        let mut support_time = Duration::ZERO;
+        let displacement = match latent {
+            Some(latent) => self.refine.forward_host(&latent, c, &rgraph)?,
+            None => {
+                let support = rgraph.support()?;
+                let t = Instant::now();
+                let mean = graph.mean_rows(&support)?;
+                let t_mean = t.elapsed();
+                let embeddings = fused.aggregate(&features, &mean, &support)?;
+                support_time = t.elapsed();
+                timings.knn += t_mean;
+                timings.projector += support_time - t_mean;
+                self.refine
+                    .forward_host(&embeddings, c, &rgraph.renumbered(&support)?)?
+            }
+        };
+        timings.refinement = t2.elapsed() - support_time;
+        Ok(SimplifierOutput {
+            points: rgraph.positions.add(&displacement)?,
+            indices,
+            timings,
+        })
+    }
+
+    /// The config's selector on `points` (`latent`: every point's embedding, `#N×C`, which
+    /// the latent selector needs).
+    fn select(
+        &self,
+        points: &[[f32; 3]],
+        graph: &NeighbourIndex,
+        latent: Option<&[f32]>,
+        choice: &Choice,
+    ) -> Result<Vec<u32>> {
+        let start = FpsStart::Seeded(choice.seed);
+        Ok(match (self.config.selector, latent) {
+            (SelectorSpace::Latent, Some(latent)) => latent_farthest_point_sampling(
+                latent,
                 self.config.hidden,
                 points,
-                target,
-                selection,
-                seed,
+                choice.target,
+                choice.selection,
+                choice.seed,
             )?,
-            SelectorSpace::Position => {
-                fast_farthest_point_sampling(points, target, FpsStart::Seeded(seed))?
+            (SelectorSpace::Latent, None) => {
+                return Err(Error::Invalid {
+                    what: "latent selector".into(),
+                    reason: "has no embeddings to sample".into(),
+                });
             }
-            SelectorSpace::Centroidal => {
-                let (fps, owners) = fast_farthest_point_sampling_with_owners(
-                    points,
-                    target,
-                    FpsStart::Seeded(seed),
-                )?;
+            (SelectorSpace::Position, _) => {
+                fast_farthest_point_sampling(points, choice.target, start)?
+            }
+            (SelectorSpace::Centroidal, _) => {
+                let (fps, owners) = match graph.knn_index() {
+                    Some(index) => {
+                        fast_farthest_point_sampling_indexed(index, choice.target, start)?
+                    }
+                    None => fast_farthest_point_sampling_with_owners(points, choice.target, start)?,
+                };
                 centroidal_relaxation_indexed(
                     points,
                     graph.knn_index(),
@@ -334,40 +459,90 @@ impl PointSimplifier {
                     CENTROIDAL_STEPS,
                 )?
             }
-        };
-        let t2 = Instant::now();
-        let rgraph = match graph.knn_index() {
-            Some(index) => refinement_graph_indexed(
-                index,
-                points,
-                &indices,
-                self.config.refine_neighbours,
-                &self.device,
-            )?,
-            None => refinement_graph(
-                points,
-                &indices,
-                self.config.refine_neighbours,
-                &self.device,
-            )?,
-        };
-        let displacement = match embeddings.filter(Tensor::track_op) {
-            Some(embeddings) => self.refine.forward(&embeddings, &rgraph)?,
-            None => self
-                .refine
-                .forward_host(&latent, self.config.hidden, &rgraph)?,
-        };
-        let simplified = rgraph.positions.add(&displacement)?;
-        let t3 = Instant::now();
-        Ok(SimplifierOutput {
-            points: simplified,
-            indices,
-            timings: StageTimings {
-                knn: Duration::ZERO,
-                projector: t1 - t0,
-                selector: t2 - t1,
-                refinement: t3 - t2,
-            },
         })
+    }
+
+    /// AttRef's eq. 5.5 graph of the kept `indices`, over the graph's k-d tree when it has one.
+    fn refinement_graph(
+        &self,
+        points: &[[f32; 3]],
+        graph: &NeighbourIndex,
+        indices: &[u32],
+    ) -> Result<RefinementGraph> {
+        let k = self.config.refine_neighbours;
+        match graph.knn_index() {
+            Some(index) => refinement_graph_indexed(index, points, indices, k, &self.device),
+            None => refinement_graph(points, indices, k, &self.device),
+        }
+    }
+}
+
+/// What [`PointSimplifier::forward`] is asked to keep: how many, the latent selector's cell
+/// options, the FPS seed.
+struct Choice {
+    target: usize,
+    selection: LatentSamplingOptions,
+    seed: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::{SpatialIndex, icosphere, sample_surface};
+
+    #[test]
+    fn fused_inference_keeps_the_candle_paths_points() {
+        // bundled weights: the fused path (embeddings only where AttRef reads, the lazy k-NN
+        // rows, FPS on the shared tree) against the candle projector on the full graph
+        let bundled: PointSimplifier = crate::pretrained::load("point_simplifier").unwrap();
+        let points = sample_surface(&icosphere(4), 6000, 3).unwrap().points;
+        for selector in [SelectorSpace::Centroidal, SelectorSpace::Position] {
+            let model = PointSimplifier {
+                config: PointSimplifierConfig {
+                    selector,
+                    ..bundled.config
+                },
+                ..bundled.clone()
+            };
+            let index = SpatialIndex::new(&points).unwrap();
+            let lazy = NeighbourIndex::from_knn_index(index, 7, &Device::Cpu).unwrap();
+            let choice = Choice {
+                target: 300,
+                selection: LatentSamplingOptions::default(),
+                seed: 4,
+            };
+            let fused = model.fused_projector(false).unwrap().unwrap();
+            let got = model
+                .forward_fused(&fused, &points, &lazy, &choice)
+                .unwrap();
+            let full = NeighbourIndex::from_knn(
+                &meshgnn_graph::knn_graph(&points, 7).unwrap(),
+                &Device::Cpu,
+            )
+            .unwrap();
+            let want = model
+                .forward_autograd(&points, &full, &choice, false)
+                .unwrap();
+            assert_eq!(got.indices, want.indices, "{selector:?}");
+            let (a, b): (Vec<Vec<f32>>, Vec<Vec<f32>>) = (
+                got.points.to_vec2().unwrap(),
+                want.points.to_vec2().unwrap(),
+            );
+            let moved = a
+                .iter()
+                .zip(&points_at(&points, &got.indices))
+                .map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f32::max))
+                .fold(0.0, f32::max);
+            assert!(moved > 0.0, "AttRef moves the points");
+            for (p, q) in a.iter().zip(&b) {
+                for d in 0..3 {
+                    assert!((p[d] - q[d]).abs() <= 1e-5, "{p:?} vs {q:?}");
+                }
+            }
+        }
+    }
+
+    fn points_at(points: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+        indices.iter().map(|&i| points[i as usize]).collect()
     }
 }

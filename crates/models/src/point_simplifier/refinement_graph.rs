@@ -36,6 +36,46 @@ pub struct RefinementGraph {
     pub k: usize,
 }
 
+impl RefinementGraph {
+    /// The input points the graph reads (centres and their neighbours), sorted and distinct:
+    /// the only points whose embeddings AttRef needs.
+    pub fn support(&self) -> Result<Vec<u32>> {
+        let mut support: Vec<u32> = self.neighbours.to_vec1()?;
+        support.extend(self.centres.to_vec1::<u32>()?);
+        support.par_sort_unstable();
+        support.dedup();
+        Ok(support)
+    }
+
+    /// The same graph with its point indices replaced by their positions in `support` (sorted
+    /// and distinct, holding every point the graph reads, as [`RefinementGraph::support`]):
+    /// AttRef then reads embeddings computed for the support alone. Errors on a point
+    /// missing from `support`.
+    pub fn renumbered(&self, support: &[u32]) -> Result<Self> {
+        let renumber = |t: &Tensor| -> Result<Tensor> {
+            let ids: Vec<u32> = t.to_vec1()?;
+            let positions = ids
+                .par_iter()
+                .map(|&i| {
+                    support
+                        .binary_search(&i)
+                        .map(|p| p as u32)
+                        .map_err(|_| Error::Invalid {
+                            what: format!("point {i}"),
+                            reason: "is missing from the support".into(),
+                        })
+                })
+                .collect::<Result<Vec<u32>>>()?;
+            Ok(Tensor::from_vec(positions, ids.len(), t.device())?)
+        };
+        Ok(Self {
+            centres: renumber(&self.centres)?,
+            neighbours: renumber(&self.neighbours)?,
+            ..self.clone()
+        })
+    }
+}
+
 /// Builds the AttRef graph of `centres: #M` (indices into `points: #N×3`) with `k` neighbours
 /// each (15 in the thesis; capped at N). O((N + M k) log N), parallel over centres.
 ///
@@ -150,6 +190,29 @@ mod tests {
         let nb: Vec<u32> = g.neighbours.to_vec1().unwrap();
         assert_eq!(nb, vec![0, 1, 2, 1]);
         assert!(refinement_graph(&pts, &[3], 2, &Device::Cpu).is_err());
+    }
+
+    #[test]
+    fn renumbered_to_its_support_it_reads_the_same_rows() {
+        let pts: Vec<[f32; 3]> = (0..200u32)
+            .map(|i| {
+                let t = i as f32 * 0.61;
+                [t.sin(), (0.7 * t).cos(), (i % 5) as f32 * 0.2]
+            })
+            .collect();
+        let g = refinement_graph(&pts, &[150, 3, 77], 6, &Device::Cpu).unwrap();
+        let support = g.support().unwrap();
+        assert!(support.windows(2).all(|w| w[0] < w[1]));
+        assert!(support.len() <= 18 && support.contains(&150));
+        let compact = g.renumbered(&support).unwrap();
+        let at = |t: &Tensor| t.to_vec1::<u32>().unwrap();
+        for (a, b) in at(&g.neighbours).iter().zip(at(&compact.neighbours)) {
+            assert_eq!(*a, support[b as usize]);
+        }
+        for (a, b) in at(&g.centres).iter().zip(at(&compact.centres)) {
+            assert_eq!(*a, support[b as usize]);
+        }
+        assert!(g.renumbered(&support[1..]).is_err());
     }
 
     #[test]

@@ -152,7 +152,10 @@ impl PointSimplifier {
             points: norm.invert(&kept),
             indices: out.indices,
             normals,
-            timings: StageTimings { knn, ..out.timings },
+            timings: StageTimings {
+                knn: knn + out.timings.knn,
+                ..out.timings
+            },
             total: start.elapsed(),
         })
     }
