@@ -1,15 +1,16 @@
 //! The projector of thesis ch. 5.3.2 at inference, in plain Rust: the point-wise layers
 //! (`Linear → BatchNorm → ReLU`, batch norm folded into the linear map) run fused row by row,
 //! so each point's 64-channel intermediates stay in registers and L1 instead of being written
-//! and re-read as `N × 64` tensors; then eq. 5.4 (the GNN mean as one parallel sparse product,
-//! the two linear maps and the ReLU fused in place). Chunks of points run in parallel with
-//! rayon; every row is computed the same way whatever the thread count, so results are
-//! deterministic. Used only without autograd (plain, non-trainable weights on the CPU).
+//! and re-read as `N × 64` tensors ([`FusedProjector::pointwise`]); then eq. 5.4 at the rows
+//! asked — all of them for the latent selector, the points AttRef reads otherwise — with the
+//! neighbour mean, the two linear maps and the ReLU fused per row
+//! ([`FusedProjector::aggregate`]). Chunks of points run in parallel with rayon; every row is
+//! computed the same way whatever the thread count and whichever rows are asked, so results
+//! are deterministic. Used only without autograd (plain, non-trainable weights on the CPU).
 
 use candle_core::Tensor;
-use rayon::prelude::*;
-
 use meshgnn_graph::CsrMatrix;
+use rayon::prelude::*;
 
 use crate::{Error, Result};
 
