@@ -22,11 +22,12 @@ use candle_nn::{Linear, Module, VarBuilder};
 use rayon::prelude::*;
 
 use super::RefinementGraph;
+use super::fused_projector::HostAffine;
 use crate::{Error, Result};
 
-/// Centres per chunk (`2048 × 15 × 64` floats ≈ 8 MB of gathered features: below the
-/// allocator's 32 MB mmap ceiling, so the chunks reuse heap memory instead of faulting in
-/// fresh pages each time, which made a cold 1M-point run's AttRef 2-3× slower).
+/// Centres per chunk of the candle path (`2048 × 15 × 64` floats ≈ 8 MB of gathered
+/// features: temporaries under the allocator's 32 MB mmap ceiling reuse heap memory instead of
+/// faulting in fresh pages each chunk).
 const CHUNK: usize = 2048;
 
 /// Widths of the layer's parts.
@@ -127,8 +128,10 @@ impl AttentionRefinement {
     }
 
     /// [`AttentionRefinement::forward`] for inference, from the embeddings as a plain
-    /// `features: #N×channels` slice: rows are gathered in parallel Rust (candle's
-    /// `index_select` copies row by row), no autograd.
+    /// `features: #N×channels` slice, as fused host loops: each centre's queries, scores,
+    /// `φ` messages and `γ` step stay in registers and L1 (no `M·k × C` gathered tensors),
+    /// centres in parallel, row kernels dispatched per instruction set as the projector's.
+    /// No autograd. Equals [`AttentionRefinement::forward`] up to float rounding (tested).
     pub fn forward_host(
         &self,
         features: &[f32],
@@ -141,25 +144,60 @@ impl AttentionRefinement {
                 reason: format!("{} values are not rows of {channels}", features.len()),
             });
         }
+        let rows = features.len() / channels;
         let centres: Vec<u32> = graph.centres.to_vec1()?;
         let neighbours: Vec<u32> = graph.neighbours.to_vec1()?;
-        let device = graph.centres.device().clone();
-        self.run(graph, &device, |start, len, k| {
-            let nb = neighbours.get(start * k..(start + len) * k).unwrap_or(&[]);
-            let cs = centres.get(start..start + len).unwrap_or(&[]);
-            Ok((
-                Tensor::from_vec(
-                    gather_rows(features, channels, nb)?,
-                    (len * k, channels),
-                    &device,
-                )?,
-                Tensor::from_vec(
-                    gather_rows(features, channels, cs)?,
-                    (len, channels),
-                    &device,
-                )?,
-            ))
-        })
+        if let Some(&bad) = centres
+            .iter()
+            .chain(&neighbours)
+            .find(|&&i| i as usize >= rows)
+        {
+            return Err(Error::Invalid {
+                what: format!("AttRef neighbour {bad}"),
+                reason: format!("out of range for {rows} feature rows"),
+            });
+        }
+        let offsets: Vec<f32> = graph.offsets.flatten_all()?.to_vec1()?;
+        let scales: Vec<f32> = graph.scales.flatten_all()?.to_vec1()?;
+        let m = centres.len();
+        let k = graph.k;
+        let device = graph.centres.device();
+        if m == 0 {
+            return Ok(Tensor::zeros((0, 3), candle_core::DType::F32, device)?);
+        }
+        if k == 0 || neighbours.len() != m * k || offsets.len() != m * k * 3 || scales.len() != m {
+            return Err(Error::Invalid {
+                what: "refinement graph".into(),
+                reason: format!("{k} neighbours per centre do not fit its {m} centres"),
+            });
+        }
+        let layers = HostLayers::new(self)?;
+        if layers.query.input() != channels || layers.phi[0].input() != channels + 3 {
+            return Err(Error::Invalid {
+                what: "AttRef features".into(),
+                reason: format!("{channels} channels for a layer built for another width"),
+            });
+        }
+        let arch = pulp::Arch::new();
+        let mut steps = vec![0f32; m * 3];
+        steps
+            .par_chunks_mut(HOST_CHUNK * 3)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let first = chunk * HOST_CHUNK;
+                arch.dispatch(HostCentres {
+                    layers: &layers,
+                    features,
+                    channels,
+                    k,
+                    centres: &centres[first..first + out.len() / 3],
+                    neighbours: &neighbours[first * k..],
+                    offsets: &offsets[first * k * 3..],
+                    scales: &scales[first..],
+                    out,
+                })
+            });
+        Ok(Tensor::from_vec(steps, (m, 3), device)?)
     }
 
     /// The layer on chunks of centres; `gather(start, len, k)` gives the neighbour features
@@ -216,22 +254,112 @@ impl AttentionRefinement {
     }
 }
 
-/// Rows `indices` of `values: #N×c`, in parallel; an index past N is an error.
-fn gather_rows(values: &[f32], c: usize, indices: &[u32]) -> Result<Vec<f32>> {
-    let mut out = vec![0f32; indices.len() * c];
-    out.par_chunks_mut(c)
-        .zip(indices.par_iter())
-        .try_for_each(|(row, &i)| {
-            let src = values
-                .get(i as usize * c..(i as usize + 1) * c)
-                .ok_or_else(|| Error::Invalid {
-                    what: format!("AttRef neighbour {i}"),
-                    reason: format!("out of range for {} feature rows", values.len() / c),
-                })?;
-            row.copy_from_slice(src);
-            Ok::<(), Error>(())
-        })?;
-    Ok(out)
+/// Centres per parallel task of [`AttentionRefinement::forward_host`].
+const HOST_CHUNK: usize = 256;
+
+/// The layer's linear maps packed for row-at-a-time products.
+struct HostLayers {
+    query: HostAffine,
+    key: HostAffine,
+    phi: [HostAffine; 2],
+    gamma: [HostAffine; 2],
+    inv_sqrt_d: f32,
+}
+
+impl HostLayers {
+    fn new(layer: &AttentionRefinement) -> Result<Self> {
+        let pack = |l: &Linear| -> Result<HostAffine> {
+            HostAffine::from_transposed(
+                &l.weight().detach().t()?.contiguous()?,
+                l.bias().map(|b| b.detach()).as_ref(),
+            )
+        };
+        Ok(Self {
+            query: pack(&layer.query)?,
+            key: pack(&layer.key)?,
+            phi: [pack(&layer.phi[0])?, pack(&layer.phi[1])?],
+            gamma: [pack(&layer.gamma[0])?, pack(&layer.gamma[1])?],
+            inv_sqrt_d: (1.0 / (layer.attention_dim as f64).sqrt()) as f32,
+        })
+    }
+}
+
+/// Eq. 5.5 for a run of centres: `out: #centres × 3` gets `s_i · tanh(γ(Σ_j α_ij φ_j))`.
+struct HostCentres<'a> {
+    layers: &'a HostLayers,
+    features: &'a [f32],
+    channels: usize,
+    k: usize,
+    centres: &'a [u32],
+    /// From the run's first centre on, `k` per centre.
+    neighbours: &'a [u32],
+    /// From the run's first centre on, `3k` per centre.
+    offsets: &'a [f32],
+    /// From the run's first centre on.
+    scales: &'a [f32],
+    out: &'a mut [f32],
+}
+
+impl pulp::WithSimd for HostCentres<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self {
+            layers,
+            features,
+            channels: c,
+            k,
+            ..
+        } = self;
+        let row = |i: u32| &features[i as usize * c..(i as usize + 1) * c];
+        let d = layers.key.output();
+        let (mut key, mut query) = (vec![0f32; d], vec![0f32; d]);
+        let mut phi_in = vec![0f32; c + 3];
+        let mut hidden = vec![0f32; layers.phi[0].output()];
+        let mut messages = vec![0f32; k * 3];
+        let mut scores = vec![0f32; k];
+        let mut gamma_hidden = vec![0f32; layers.gamma[0].output()];
+        for (r, (out, &centre)) in self.out.chunks_exact_mut(3).zip(self.centres).enumerate() {
+            layers.key.apply(row(centre), &mut key);
+            for j in 0..k {
+                let nb = row(self.neighbours[r * k + j]);
+                layers.query.apply(nb, &mut query);
+                let dot: f32 = query.iter().zip(&key).map(|(a, b)| a * b).sum();
+                scores[j] = dot * layers.inv_sqrt_d;
+                phi_in[..c].copy_from_slice(nb);
+                let o = (r * k + j) * 3;
+                phi_in[c..].copy_from_slice(&self.offsets[o..o + 3]);
+                layers.phi[0].apply(&phi_in, &mut hidden);
+                for h in hidden.iter_mut() {
+                    *h = h.max(0.0);
+                }
+                layers.phi[1].apply(&hidden, &mut messages[j * 3..j * 3 + 3]);
+            }
+            // softmax over the neighbours, max-shifted
+            let max = scores.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+            let mut total = 0f32;
+            for s in scores.iter_mut() {
+                *s = (*s - max).exp();
+                total += *s;
+            }
+            let mut message = [0f32; 3];
+            for (s, m) in scores.iter().zip(messages.chunks_exact(3)) {
+                for (acc, &v) in message.iter_mut().zip(m) {
+                    *acc += s / total * v;
+                }
+            }
+            layers.gamma[0].apply(&message, &mut gamma_hidden);
+            for h in gamma_hidden.iter_mut() {
+                *h = h.max(0.0);
+            }
+            layers.gamma[1].apply(&gamma_hidden, out);
+            let scale = self.scales[r];
+            for v in out.iter_mut() {
+                *v = v.tanh() * scale;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -297,6 +425,42 @@ mod tests {
     }
 
     #[test]
+    fn host_loops_equal_the_candle_layer() {
+        // random weights and embeddings, centres with coincident neighbours (s = 0) included
+        let dev = Device::Cpu;
+        let map = candle_nn::VarMap::new();
+        let vb = candle_nn::VarBuilder::from_varmap(&map, DType::F32, &dev);
+        let cfg = AttentionRefinementConfig {
+            channels: 8,
+            attention_dim: 4,
+            phi_hidden: 6,
+            gamma_hidden: 5,
+        };
+        let att = AttentionRefinement::new(vb, &cfg).unwrap();
+        let mut pts = cloud();
+        pts.extend((0..40).map(|i| {
+            let t = i as f32 * 0.7;
+            [t.sin(), t.cos(), (i % 3) as f32]
+        }));
+        pts.extend([[5.0, 5.0, 5.0]; 4]);
+        let centres: Vec<u32> = (0..pts.len() as u32).step_by(3).collect();
+        let g = refinement_graph(&pts, &centres, 4, &dev).unwrap();
+        let f = Tensor::randn(0.0f32, 1.0, (pts.len(), 8), &dev).unwrap();
+        let want: Vec<Vec<f32>> = att.forward(&f, &g).unwrap().to_vec2().unwrap();
+        let host: Vec<f32> = f.flatten_all().unwrap().to_vec1().unwrap();
+        let got: Vec<Vec<f32>> = att.forward_host(&host, 8, &g).unwrap().to_vec2().unwrap();
+        assert_eq!(got.len(), want.len());
+        for (a, b) in got.iter().zip(&want) {
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= 1e-5 * (1.0 + y.abs()), "{a:?} vs {b:?}");
+            }
+        }
+        assert!(want.iter().flatten().any(|&v| v != 0.0));
+        assert!(att.forward_host(&host[..16], 8, &g).is_err());
+        assert!(att.forward_host(&host, 7, &g).is_err());
+    }
+
+    #[test]
     fn zero_phi_gives_zero_displacement() {
         let dev = Device::Cpu;
         let map = candle_nn::VarMap::new();
@@ -330,7 +494,8 @@ mod tests {
             .to_vec1()
             .unwrap();
         assert_eq!(delta, vec![0.0; 9]);
-        // the inference path (host gathers) gives the same displacements
+        // the inference path (host loops, summing in another order) gives the same
+        // displacements up to rounding
         let host: Vec<f32> = f.flatten_all().unwrap().to_vec1().unwrap();
         let a: Vec<f32> = random
             .forward(&f, &g)
@@ -346,7 +511,10 @@ mod tests {
             .unwrap()
             .to_vec1()
             .unwrap();
-        assert_eq!(a, b);
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-5 * (1.0 + y.abs()), "{a:?} vs {b:?}");
+        }
         assert!(random.forward_host(&host[..8], 4, &g).is_err());
         // and the random layer does move them
         let moved: Vec<f32> = random

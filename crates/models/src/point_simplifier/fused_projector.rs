@@ -66,9 +66,19 @@ impl HostAffine {
         })
     }
 
+    /// Input channels `C_in`.
+    pub(crate) fn input(&self) -> usize {
+        self.input
+    }
+
+    /// Output channels `C_out`.
+    pub(crate) fn output(&self) -> usize {
+        self.output
+    }
+
     /// `y = W x + b` for one row: `x: #C_in`, `y: #C_out` (overwritten).
     #[inline(always)]
-    fn apply(&self, x: &[f32], y: &mut [f32]) {
+    pub(crate) fn apply(&self, x: &[f32], y: &mut [f32]) {
         y.copy_from_slice(&self.bias);
         self.accumulate(x, y);
     }
