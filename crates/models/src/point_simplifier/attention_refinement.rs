@@ -268,12 +268,7 @@ struct HostLayers {
 
 impl HostLayers {
     fn new(layer: &AttentionRefinement) -> Result<Self> {
-        let pack = |l: &Linear| -> Result<HostAffine> {
-            HostAffine::from_transposed(
-                &l.weight().detach().t()?.contiguous()?,
-                l.bias().map(|b| b.detach()).as_ref(),
-            )
-        };
+        let pack = HostAffine::from_linear;
         Ok(Self {
             query: pack(&layer.query)?,
             key: pack(&layer.key)?,

@@ -66,6 +66,14 @@ impl HostAffine {
         })
     }
 
+    /// The map of a candle `Linear` (`y = x Wᵀ + b`), detached.
+    pub(crate) fn from_linear(linear: &candle_nn::Linear) -> Result<Self> {
+        Self::from_transposed(
+            &linear.weight().detach().t()?.contiguous()?,
+            linear.bias().map(|b| b.detach()).as_ref(),
+        )
+    }
+
     /// Input channels `C_in`.
     pub(crate) fn input(&self) -> usize {
         self.input

@@ -54,15 +54,10 @@ impl MeanAggregationGnn {
 
     /// `(W_c with b, W_n)` packed for the fused host projector.
     pub(crate) fn host_affines(&self) -> Result<(HostAffine, HostAffine)> {
-        let centre = HostAffine::from_transposed(
-            &self.centre.weight().detach().t()?.contiguous()?,
-            self.centre.bias().map(|b| b.detach()).as_ref(),
-        )?;
-        let neighbour = HostAffine::from_transposed(
-            &self.neighbour.weight().detach().t()?.contiguous()?,
-            self.neighbour.bias().map(|b| b.detach()).as_ref(),
-        )?;
-        Ok((centre, neighbour))
+        Ok((
+            HostAffine::from_linear(&self.centre)?,
+            HostAffine::from_linear(&self.neighbour)?,
+        ))
     }
 
     /// Eq. 5.4: `features: (N, C_in)`, `graph` over the same N points → `(N, C_out)`.
