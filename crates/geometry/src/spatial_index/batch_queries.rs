@@ -210,23 +210,9 @@ impl SpatialIndex {
             *c = next;
             next += u32::from(w);
         }
-        let mut indices = vec![0u32; ids.len() * k];
-        let mut squared_distances = vec![0f32; ids.len() * k];
-        indices
-            .par_chunks_mut(k)
-            .zip(squared_distances.par_chunks_mut(k))
-            .zip(ids.par_iter())
-            .for_each(|((idx, dist), &id)| {
-                let row = compact_of_slot[slot_of[id as usize] as usize] as usize;
-                let from = row * k..(row + 1) * k;
-                idx.copy_from_slice(&by_slot.indices[from.clone()]);
-                dist.copy_from_slice(&by_slot.squared_distances[from]);
-            });
-        Ok(Neighbours {
-            k,
-            indices,
-            squared_distances,
-        })
+        Ok(rows_reordered(&by_slot, ids.len(), |i| {
+            compact_of_slot[slot_of[ids[i] as usize] as usize] as usize
+        }))
     }
 
     /// The k-NN rows of the `count` `wanted` slots, in slot order, leaves in parallel.
@@ -414,22 +400,38 @@ impl SpatialIndex {
         for (r, &q) in order.iter().enumerate() {
             rank[q as usize] = r as u32;
         }
-        let mut indices = vec![0u32; queries.len() * k];
-        let mut squared_distances = vec![0.0f32; queries.len() * k];
-        indices
-            .par_chunks_mut(k)
-            .zip(squared_distances.par_chunks_mut(k))
-            .zip(rank.par_iter())
-            .for_each(|((idx, dist), &r)| {
-                let from = r as usize * k..(r as usize + 1) * k;
-                idx.copy_from_slice(&by_order_idx[from.clone()]);
-                dist.copy_from_slice(&by_order_dist[from]);
-            });
-        Neighbours {
+        let by_order = Neighbours {
             k,
-            indices,
-            squared_distances,
-        }
+            indices: by_order_idx,
+            squared_distances: by_order_dist,
+        };
+        rows_reordered(&by_order, queries.len(), |i| rank[i] as usize)
+    }
+}
+
+/// `count` rows taken from `source`: row `i` is its row `row_of(i)`, in parallel.
+fn rows_reordered(
+    source: &Neighbours,
+    count: usize,
+    row_of: impl Fn(usize) -> usize + Sync,
+) -> Neighbours {
+    let k = source.k;
+    let mut indices = vec![0u32; count * k];
+    let mut squared_distances = vec![0f32; count * k];
+    indices
+        .par_chunks_mut(k)
+        .zip(squared_distances.par_chunks_mut(k))
+        .enumerate()
+        .for_each(|(i, (idx, dist))| {
+            let r = row_of(i);
+            let from = r * k..(r + 1) * k;
+            idx.copy_from_slice(&source.indices[from.clone()]);
+            dist.copy_from_slice(&source.squared_distances[from]);
+        });
+    Neighbours {
+        k,
+        indices,
+        squared_distances,
     }
 }
 

@@ -194,19 +194,10 @@ impl NeighbourIndex {
     /// AttRef looks at, not of all).
     pub fn mean_rows(&self, rows: &[u32]) -> Result<CsrMatrix> {
         if let (None, Some(index)) = (self.slots.get(), self.knn_index.as_deref()) {
-            // k distinct neighbours per row, weight 1/k: sorting each row is the whole CSR form
             let k = self.width;
-            let mut columns = index.knn_rows(rows, k)?.indices;
-            columns.par_chunks_mut(k).for_each(<[u32]>::sort_unstable);
-            let offsets = (0..=rows.len()).map(|r| r * k).collect();
-            let weights = vec![1.0 / k as f32; columns.len()];
-            return Ok(CsrMatrix::from_parts(
-                rows.len(),
-                self.len,
-                offsets,
-                columns,
-                weights,
-            )?);
+            let nn = index.knn_rows(rows, k)?;
+            let weights = vec![1.0 / k as f32; nn.indices.len()];
+            return mean_matrix(&nn.indices, &weights, rows.len(), self.len, k);
         }
         let full = &self.slots()?.mean;
         let mut offsets = Vec::with_capacity(rows.len() + 1);
@@ -285,35 +276,31 @@ fn mean_matrix(
     cols: usize,
     width: usize,
 ) -> Result<CsrMatrix> {
-    let merged_rows: Vec<Vec<(u32, f32)>> = indices
-        .par_chunks(width.max(1))
-        .zip(weights.par_chunks(width.max(1)))
-        .map(|(idx, w)| {
-            let mut row: Vec<(u32, f32)> = idx
-                .iter()
-                .zip(w)
-                .filter(|&(_, &w)| w > 0.0)
-                .map(|(&i, &w)| (i, w))
-                .collect();
-            row.sort_unstable_by_key(|&(i, _)| i);
-            let mut merged: Vec<(u32, f32)> = Vec::with_capacity(row.len());
-            for (i, w) in row {
-                match merged.last_mut() {
-                    Some(last) if last.0 == i => last.1 += w,
-                    _ => merged.push((i, w)),
-                }
-            }
-            merged
-        })
+    // each row's slots sorted by index in place (rows in parallel), then one pass that drops
+    // padding (weight 0) and merges repeated neighbours
+    let width = width.max(1);
+    let mut slots: Vec<(u32, f32)> = indices
+        .iter()
+        .copied()
+        .zip(weights.iter().copied())
         .collect();
+    slots
+        .par_chunks_mut(width)
+        .for_each(|row| row.sort_unstable_by_key(|&(i, _)| i));
     let mut offsets = Vec::with_capacity(rows + 1);
     offsets.push(0);
-    let mut columns = Vec::with_capacity(indices.len());
-    let mut vals = Vec::with_capacity(indices.len());
-    for row in merged_rows {
-        for (i, w) in row {
-            columns.push(i);
-            vals.push(w);
+    let mut columns: Vec<u32> = Vec::with_capacity(slots.len());
+    let mut vals: Vec<f32> = Vec::with_capacity(slots.len());
+    for row in slots.chunks(width) {
+        let row_start = columns.len();
+        for &(i, w) in row.iter().filter(|&&(_, w)| w > 0.0) {
+            match (columns.last(), vals.last_mut()) {
+                (Some(&last), Some(v)) if columns.len() > row_start && last == i => *v += w,
+                _ => {
+                    columns.push(i);
+                    vals.push(w);
+                }
+            }
         }
         offsets.push(columns.len());
     }
