@@ -269,6 +269,48 @@ impl SpatialIndex {
         }
     }
 
+    /// The same tree over its points renumbered in slot order, and the permutation: the new
+    /// index's point `i` is `slot_points()[i]`, the original point `order[i]`. It has the
+    /// nodes of [`SpatialIndex::with_leaf_size`] on the slot-ordered points (every node holds
+    /// a range of slots, and the `(coordinate, index)` medians split the renumbered points the
+    /// same way), so it answers every query as that build would, without a second build: a
+    /// cloud then processed in this spatially coherent order keeps its queries and gathers in
+    /// cache.
+    ///
+    /// ```
+    /// use meshgnn_geometry::SpatialIndex;
+    /// let pts: Vec<[f32; 3]> = (0..100).map(|i| [((i * 37) % 100) as f32, 0.0, 0.0]).collect();
+    /// let (index, order) = SpatialIndex::new(&pts)?.into_slot_order();
+    /// assert_eq!(index.slot_ids(), (0..100).collect::<Vec<u32>>());
+    /// assert!(order.iter().enumerate().all(|(i, &o)| index.slot_points()[i] == pts[o as usize]));
+    /// # Ok::<(), meshgnn_geometry::Error>(())
+    /// ```
+    pub fn into_slot_order(self) -> (Self, Vec<u32>) {
+        let Self {
+            points,
+            ids,
+            mut nodes,
+            first_leaf,
+        } = self;
+        for node in &mut nodes {
+            node.min_id = if node.start < node.end {
+                node.start
+            } else {
+                u32::MAX
+            };
+        }
+        let renumbered = (0..points.len() as u32).collect();
+        (
+            Self {
+                points,
+                ids: renumbered,
+                nodes,
+                first_leaf,
+            },
+            ids,
+        )
+    }
+
     /// Number of indexed points #P.
     pub fn len(&self) -> usize {
         self.points.len()
@@ -611,6 +653,48 @@ mod tests {
         all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         all.truncate(k);
         all
+    }
+
+    #[test]
+    fn slot_order_tree_is_the_tree_built_on_the_slot_order() {
+        // duplicates and ties on the split coordinates included
+        for (n, leaf) in [(5000, 16), (3001, 1), (777, 100), (3, 16), (0, 16)] {
+            let points = cloud_with_ties(9, n);
+            let index = SpatialIndex::with_leaf_size(&points, leaf).unwrap();
+            let ids = index.slot_ids().to_vec();
+            let (renumbered, order) = index.into_slot_order();
+            assert_eq!(order, ids);
+            let rebuilt = SpatialIndex::with_leaf_size(renumbered.slot_points(), leaf).unwrap();
+            assert_eq!(
+                renumbered.nodes(),
+                rebuilt.nodes(),
+                "{n} points, leaf {leaf}"
+            );
+            assert_eq!(renumbered.first_leaf(), rebuilt.first_leaf());
+            // each leaf holds the same points (its order within a leaf is the build's)
+            for node in &renumbered.nodes()[renumbered.first_leaf()..] {
+                let slots = node.start as usize..node.end as usize;
+                let mut a = renumbered.slot_ids()[slots.clone()].to_vec();
+                let mut b = rebuilt.slot_ids()[slots].to_vec();
+                a.sort_unstable();
+                b.sort_unstable();
+                assert_eq!(a, b);
+            }
+            for (i, &id) in renumbered.slot_ids().iter().enumerate() {
+                assert_eq!(
+                    renumbered.slot_points()[i],
+                    points[order[id as usize] as usize]
+                );
+            }
+            if n > 0 {
+                let queries = &renumbered.slot_points()[..n.min(50)];
+                let k = 7.min(n);
+                assert_eq!(
+                    renumbered.knn(queries, k).unwrap(),
+                    rebuilt.knn(queries, k).unwrap()
+                );
+            }
+        }
     }
 
     #[test]

@@ -129,13 +129,20 @@ pub fn centroidal_relaxation_indexed(
                 false => c,
             })
             .collect();
-        let candidates = input.knn(&means, SNAP_CANDIDATES.min(n))?;
+        // the nearest input point of every mean; the few that an earlier kept point took this
+        // step look further, one at a time
+        let nearest = input.knn(&means, 1)?.indices;
         taken.fill(false);
-        for (j, mean) in means.iter().enumerate() {
-            let row = &candidates.indices[j * candidates.k..(j + 1) * candidates.k];
-            let pick = match row.iter().find(|&&i| !taken[i as usize]) {
-                Some(&i) => i,
-                None => nearest_free(points, &taken, mean),
+        let mut candidates = Vec::with_capacity(SNAP_CANDIDATES);
+        for (j, (mean, &first)) in means.iter().zip(&nearest).enumerate() {
+            let pick = if taken[first as usize] {
+                input.nearest(mean, SNAP_CANDIDATES.min(n), None, &mut candidates);
+                match candidates.iter().find(|&&(_, i)| !taken[i as usize]) {
+                    Some(&(_, i)) => i,
+                    None => nearest_free(points, &taken, mean),
+                }
+            } else {
+                first
             };
             taken[pick as usize] = true;
             current[j] = pick;

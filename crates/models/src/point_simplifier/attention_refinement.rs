@@ -309,28 +309,35 @@ impl pulp::WithSimd for HostCentres<'_> {
         } = self;
         let row = |i: u32| &features[i as usize * c..(i as usize + 1) * c];
         let d = layers.key.output();
-        let (mut key, mut query) = (vec![0f32; d], vec![0f32; d]);
-        let mut phi_in = vec![0f32; c + 3];
-        let mut hidden = vec![0f32; layers.phi[0].output()];
+        let h = layers.phi[0].output();
+        let mut key = vec![0f32; d];
+        let mut query = vec![0f32; k * d];
+        let mut phi_in = vec![0f32; k * (c + 3)];
+        let mut hidden = vec![0f32; k * h];
         let mut messages = vec![0f32; k * 3];
         let mut scores = vec![0f32; k];
         let mut gamma_hidden = vec![0f32; layers.gamma[0].output()];
         for (r, (out, &centre)) in self.out.chunks_exact_mut(3).zip(self.centres).enumerate() {
             layers.key.apply(row(centre), &mut key);
-            for j in 0..k {
-                let nb = row(self.neighbours[r * k + j]);
-                layers.query.apply(nb, &mut query);
-                let dot: f32 = query.iter().zip(&key).map(|(a, b)| a * b).sum();
-                scores[j] = dot * layers.inv_sqrt_d;
-                phi_in[..c].copy_from_slice(nb);
-                let o = (r * k + j) * 3;
-                phi_in[c..].copy_from_slice(&self.offsets[o..o + 3]);
-                layers.phi[0].apply(&phi_in, &mut hidden);
-                for h in hidden.iter_mut() {
-                    *h = h.max(0.0);
-                }
-                layers.phi[1].apply(&hidden, &mut messages[j * 3..j * 3 + 3]);
+            // φ's inputs `[f_j ‖ offset_j]`, one row per neighbour; θ_q reads their `f_j`
+            for ((input, &j), offset) in phi_in
+                .chunks_exact_mut(c + 3)
+                .zip(&self.neighbours[r * k..(r + 1) * k])
+                .zip(self.offsets[r * k * 3..(r + 1) * k * 3].chunks_exact(3))
+            {
+                input[..c].copy_from_slice(row(j));
+                input[c..].copy_from_slice(offset);
             }
+            layers.query.apply_strided(&phi_in, c + 3, &mut query);
+            for (s, q) in scores.iter_mut().zip(query.chunks_exact(d)) {
+                let dot: f32 = q.iter().zip(&key).map(|(a, b)| a * b).sum();
+                *s = dot * layers.inv_sqrt_d;
+            }
+            layers.phi[0].apply_strided(&phi_in, c + 3, &mut hidden);
+            for v in hidden.iter_mut() {
+                *v = v.max(0.0);
+            }
+            layers.phi[1].apply_strided(&hidden, h, &mut messages);
             // softmax over the neighbours, max-shifted
             let max = scores.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
             let mut total = 0f32;

@@ -91,23 +91,93 @@ impl HostAffine {
         self.accumulate(x, y);
     }
 
-    /// `y += W x` for one row: `x: #C_in`, `y: #C_out`.
+    /// [`HostAffine::apply`] on the rows of `xs` (row `r` starts at `r · stride`; its first
+    /// `C_in` values are read) into `ys: #rows × C_out`, [`ROW_GROUP`] rows at a time: their
+    /// accumulators are independent chains. Every output is summed exactly as `apply` sums it.
     #[inline(always)]
-    fn accumulate(&self, x: &[f32], y: &mut [f32]) {
-        for (tile, y_tile) in self
-            .packed
-            .chunks_exact(self.input.max(1))
-            .zip(y.chunks_mut(TILE))
-        {
-            let mut acc = [0.0f32; TILE];
-            for (w, &xi) in tile.iter().zip(x) {
-                for (a, &wk) in acc.iter_mut().zip(w) {
-                    *a += xi * wk;
+    pub(crate) fn apply_strided(&self, xs: &[f32], stride: usize, ys: &mut [f32]) {
+        let output = self.output.max(1);
+        for (g, ys) in ys.chunks_mut(ROW_GROUP * output).enumerate() {
+            let row = |r: usize| &xs[(g * ROW_GROUP + r) * stride..][..self.input];
+            match ys.len() / output {
+                4 => self.apply_rows::<4>(std::array::from_fn(row), ys),
+                3 => self.apply_rows::<3>(std::array::from_fn(row), ys),
+                2 => self.apply_rows::<2>(std::array::from_fn(row), ys),
+                _ => self.apply_rows::<1>([row(0)], ys),
+            }
+        }
+    }
+
+    /// `ys[r] = W xs[r] + b` for `R` rows (`ys: #R × C_out`), tile by tile.
+    #[inline(always)]
+    fn apply_rows<const R: usize>(&self, xs: [&[f32]; R], ys: &mut [f32]) {
+        let input = self.input.max(1);
+        let n = xs.iter().fold(input, |n, x| n.min(x.len()));
+        let xs: [&[f32]; R] = std::array::from_fn(|r| &xs[r][..n]);
+        for (t, tile) in self.packed.chunks_exact(input).enumerate() {
+            let mut acc = [[0.0f32; TILE]; R];
+            for (i, w) in tile[..n].iter().enumerate() {
+                for (a, x) in acc.iter_mut().zip(&xs) {
+                    let xi = x[i];
+                    for (ak, &wk) in a.iter_mut().zip(w) {
+                        *ak += xi * wk;
+                    }
                 }
             }
-            for (yo, a) in y_tile.iter_mut().zip(acc) {
-                *yo += a;
+            let first = t * TILE;
+            let width = TILE.min(self.output.saturating_sub(first));
+            let bias = &self.bias[first..first + width];
+            for (y, a) in ys.chunks_exact_mut(self.output.max(1)).zip(&acc) {
+                for ((yo, &b), &a) in y[first..first + width].iter_mut().zip(bias).zip(a) {
+                    *yo = b + a;
+                }
             }
+        }
+    }
+
+    /// `y += W x` for one row: `x: #C_in`, `y: #C_out`. Up to [`TILE_GROUP`] tiles at once: their
+    /// accumulators are independent chains, so the adds of one wait on no other (one tile
+    /// alone is bound by the add latency). Each output still sums `x_i w_i` in input order.
+    #[inline(always)]
+    fn accumulate(&self, x: &[f32], y: &mut [f32]) {
+        let input = self.input.max(1);
+        for (group, y_group) in self
+            .packed
+            .chunks(TILE_GROUP * input)
+            .zip(y.chunks_mut(TILE_GROUP * TILE))
+        {
+            match group.len() / input {
+                4 => accumulate_tiles::<4>(group, input, x, y_group),
+                3 => accumulate_tiles::<3>(group, input, x, y_group),
+                2 => accumulate_tiles::<2>(group, input, x, y_group),
+                _ => accumulate_tiles::<1>(group, input, x, y_group),
+            }
+        }
+    }
+}
+
+/// Tiles of output channels accumulated together by [`HostAffine::accumulate`].
+const TILE_GROUP: usize = 4;
+
+/// Rows mapped together by [`HostAffine::apply_strided`].
+const ROW_GROUP: usize = 4;
+
+/// `y += W x` over `G` consecutive packed tiles (`G · input` rows of `TILE` weights).
+#[inline(always)]
+fn accumulate_tiles<const G: usize>(tiles: &[[f32; TILE]], input: usize, x: &[f32], y: &mut [f32]) {
+    let n = input.min(x.len());
+    let tiles: [&[[f32; TILE]]; G] = std::array::from_fn(|g| &tiles[g * input..g * input + n]);
+    let mut acc = [[0.0f32; TILE]; G];
+    for (i, &xi) in x[..n].iter().enumerate() {
+        for (a, tile) in acc.iter_mut().zip(&tiles) {
+            for (ak, &wk) in a.iter_mut().zip(&tile[i]) {
+                *ak += xi * wk;
+            }
+        }
+    }
+    for (y_tile, a) in y.chunks_mut(TILE).zip(acc) {
+        for (yo, a) in y_tile.iter_mut().zip(a) {
+            *yo += a;
         }
     }
 }
@@ -139,7 +209,10 @@ impl FusedProjector {
             .par_chunks_mut(CHUNK * c)
             .zip(points.par_chunks(CHUNK))
             .for_each_init(
-                || (vec![0.0f32; scratch], vec![0.0f32; scratch]),
+                || {
+                    let rows = ROW_GROUP * scratch;
+                    (vec![0.0f32; rows], vec![0.0f32; rows])
+                },
                 |(a, b), (rows, points)| {
                     arch.dispatch(PointwiseRows {
                         layers: &self.layers,
@@ -244,7 +317,7 @@ impl FusedProjector {
 }
 
 /// The point-wise layers (then ReLU) on a chunk of points: `rows: #chunk × channels` written
-/// from `points`, with two scratch rows.
+/// from `points`, [`ROW_GROUP`] points at a time, with two scratch blocks of as many rows.
 struct PointwiseRows<'a> {
     layers: &'a [HostAffine],
     channels: usize,
@@ -260,19 +333,23 @@ impl pulp::WithSimd for PointwiseRows<'_> {
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let (a, b) = self.scratch;
         let c = self.channels.max(1);
-        for (row, p) in self.rows.chunks_exact_mut(c).zip(self.points) {
+        for (rows, points) in self
+            .rows
+            .chunks_mut(ROW_GROUP * c)
+            .zip(self.points.chunks(ROW_GROUP))
+        {
             let mut width = 3;
-            a[..3].copy_from_slice(p);
+            a[..3 * points.len()].copy_from_slice(points.as_flattened());
             for layer in self.layers {
-                let y = &mut b[..layer.output];
-                layer.apply(&a[..width], y);
+                let y = &mut b[..points.len() * layer.output];
+                layer.apply_strided(a, width, y);
                 for v in y.iter_mut() {
                     *v = v.max(0.0);
                 }
                 width = layer.output;
                 std::mem::swap(a, b);
             }
-            row.copy_from_slice(&a[..c]);
+            rows.copy_from_slice(&a[..rows.len()]);
         }
     }
 }

@@ -97,14 +97,6 @@ fn cell_ranges(start: usize, len: usize, cell_size: usize, out: &mut Vec<Range<u
     cell_ranges(start + mid, len - mid, cell_size, out);
 }
 
-/// The points' indices grouped cell by cell of the partition with `cell_size` (a spatially
-/// coherent order: k-NN queries and gathers in this order stay in cache).
-pub(crate) fn spatial_order(positions: &[[f32; 3]], cell_size: usize) -> Vec<u32> {
-    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
-    order_cells(positions, &mut order, cell_size.max(1));
-    order
-}
-
 /// Shares of `target` proportional to `sizes` (largest remainder, ties by position), each at
 /// most its size; they sum to `target` (≤ Σ sizes).
 fn proportional_shares(sizes: &[usize], target: usize) -> Vec<usize> {

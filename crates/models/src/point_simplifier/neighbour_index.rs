@@ -280,13 +280,22 @@ fn mean_matrix(
     // padding (weight 0) and merges repeated neighbours
     let width = width.max(1);
     let mut slots: Vec<(u32, f32)> = indices
-        .iter()
+        .par_iter()
         .copied()
-        .zip(weights.iter().copied())
+        .zip(weights.par_iter().copied())
         .collect();
     slots
         .par_chunks_mut(width)
         .for_each(|row| row.sort_unstable_by_key(|&(i, _)| i));
+    // rows of `width` distinct real neighbours (every k-NN row) are already CSR rows
+    let complete = slots
+        .par_chunks(width)
+        .all(|row| row.iter().all(|&(_, w)| w > 0.0) && row.windows(2).all(|p| p[0].0 != p[1].0));
+    if complete {
+        let (columns, vals): (Vec<u32>, Vec<f32>) = slots.into_par_iter().unzip();
+        let offsets = (0..=rows).map(|r| r * width).collect();
+        return Ok(CsrMatrix::from_parts(rows, cols, offsets, columns, vals)?);
+    }
     let mut offsets = Vec::with_capacity(rows + 1);
     offsets.push(0);
     let mut columns: Vec<u32> = Vec::with_capacity(slots.len());

@@ -8,7 +8,6 @@ use meshgnn_geometry::SpatialIndex;
 use meshgnn_geometry::unit_sphere_normalization;
 use meshgnn_graph::CsrMatrix;
 
-use super::latent_sampling::spatial_order;
 use super::{LatentSamplingOptions, NeighbourIndex, PointSimplifier, StageTimings};
 use crate::{Error, Result};
 
@@ -89,19 +88,11 @@ impl PointSimplifier {
             });
         }
         let norm = unit_sphere_normalization(points)?;
-        let mut unit = norm.apply(points);
-        // Large clouds run in the selector's cell order (spatially coherent: the k-NN queries
-        // and feature gathers stay in cache); indices are mapped back at the end.
-        let order = (adjacency.is_none() && n > options.selection.cell_size)
-            .then(|| spatial_order(&unit, options.selection.cell_size));
-        if let Some(order) = &order {
-            unit = order
-                .iter()
-                .filter_map(|&i| unit.get(i as usize).copied())
-                .collect();
-        }
+        let unit = norm.apply(points);
         let t_knn = Instant::now();
-        let graph = match adjacency {
+        // A k-NN graph's cloud runs in its kd-tree's slot order (spatially coherent: the
+        // queries and feature gathers stay in cache); indices are mapped back at the end.
+        let (unit, order, graph) = match adjacency {
             Some(adj) => {
                 if adj.rows() != n {
                     return Err(Error::Invalid {
@@ -109,12 +100,22 @@ impl PointSimplifier {
                         reason: format!("{} rows for {n} points", adj.rows()),
                     });
                 }
-                NeighbourIndex::from_adjacency(adj, self.device())?
+                (
+                    unit,
+                    None,
+                    NeighbourIndex::from_adjacency(adj, self.device())?,
+                )
             }
-            None if n == 1 => NeighbourIndex::from_rows(&[Vec::new()], self.device())?,
+            None if n == 1 => {
+                let graph = NeighbourIndex::from_rows(&[Vec::new()], self.device())?;
+                (unit, None, graph)
+            }
             None => {
                 let k = self.config().gnn_neighbours.min(n - 1);
-                NeighbourIndex::from_knn_index(SpatialIndex::new(&unit)?, k, self.device())?
+                let (index, order) = SpatialIndex::new(&unit)?.into_slot_order();
+                let unit = index.slot_points().to_vec();
+                let graph = NeighbourIndex::from_knn_index(index, k, self.device())?;
+                (unit, Some(order), graph)
             }
         };
         let knn = t_knn.elapsed();
@@ -201,8 +202,14 @@ mod tests {
         let out = model_selecting_in(SelectorSpace::Position)
             .simplify(&pts, None, None, 40, &o)
             .unwrap();
+        // the cloud runs in its kd-tree's slot order; indices come back in the input's
         let unit = unit_sphere_normalization(&pts).unwrap().apply(&pts);
-        let fps = fast_farthest_point_sampling(&unit, 40, FpsStart::Seeded(5)).unwrap();
+        let (index, order) = SpatialIndex::new(&unit).unwrap().into_slot_order();
+        let slotted = index.slot_points();
+        let to_input =
+            |kept: Vec<u32>| -> Vec<u32> { kept.into_iter().map(|i| order[i as usize]).collect() };
+        let fps_slots = fast_farthest_point_sampling(slotted, 40, FpsStart::Seeded(5)).unwrap();
+        let fps = to_input(fps_slots.clone());
         assert_eq!(out.indices, fps);
         let latent = model().simplify(&pts, None, None, 40, &o).unwrap();
         assert_ne!(
@@ -212,7 +219,8 @@ mod tests {
         let centroidal = model_selecting_in(SelectorSpace::Centroidal)
             .simplify(&pts, None, None, 40, &o)
             .unwrap();
-        let relaxed = centroidal_relaxation(&unit, &fps, CENTROIDAL_STEPS).unwrap();
+        let relaxed =
+            to_input(centroidal_relaxation(slotted, &fps_slots, CENTROIDAL_STEPS).unwrap());
         assert_eq!(centroidal.indices, relaxed);
         assert_ne!(relaxed, fps);
     }
@@ -227,7 +235,7 @@ mod tests {
             .map(|p| [p[0] * 5.0 + 1.0, p[1] * 5.0, p[2] * 5.0])
             .collect();
         let normals = vertex_normals(&mesh);
-        // one cell, and 8+ cells (the spatially reordered path)
+        // one cell of the latent selector, and 8+ cells
         let cells = SimplifyOptions {
             selection: LatentSamplingOptions { cell_size: 80 },
             seed: 3,
