@@ -267,6 +267,59 @@ mod tests {
     }
 
     #[test]
+    fn one_step_is_the_brute_force_rule_where_snaps_collide() {
+        // points 200..300 repeat points 0..100, and both copies of 60 of them are kept: the
+        // second copy's mean lands where the first one's snapped, so it looks past taken points
+        let mut cloud = sample_surface(&icosphere(2), 300, 5).unwrap().points;
+        for i in 0..100 {
+            cloud[200 + i] = cloud[i];
+        }
+        let kept: Vec<u32> = (0..60).chain(200..260).chain([100, 150, 199]).collect();
+        let centres: Vec<[f32; 3]> = kept.iter().map(|&i| cloud[i as usize]).collect();
+        let by_distance_then_index =
+            |q: &[f32; 3], among: &[[f32; 3]], skip: &dyn Fn(usize) -> bool| {
+                (0..among.len())
+                    .filter(|&j| !skip(j))
+                    .min_by(|&a, &b| {
+                        squared_distance(&among[a], q)
+                            .total_cmp(&squared_distance(&among[b], q))
+                            .then(a.cmp(&b))
+                    })
+                    .unwrap()
+            };
+        let mut sums = vec![[0f64; 4]; kept.len()];
+        for p in &cloud {
+            let s = &mut sums[by_distance_then_index(p, &centres, &|_| false)];
+            for a in 0..3 {
+                s[a] += f64::from(p[a]);
+            }
+            s[3] += 1.0;
+        }
+        let mut taken = vec![false; cloud.len()];
+        let mut collisions = 0;
+        let want: Vec<u32> = sums
+            .iter()
+            .zip(&centres)
+            .map(|(s, c)| {
+                let mean = match s[3] > 0.0 {
+                    true => [0, 1, 2].map(|a| (s[a] / s[3]) as f32),
+                    false => *c,
+                };
+                let free = by_distance_then_index(&mean, &cloud, &|i| taken[i]);
+                collisions +=
+                    usize::from(free != by_distance_then_index(&mean, &cloud, &|_| false));
+                taken[free] = true;
+                free as u32
+            })
+            .collect();
+        assert!(
+            collisions > 5,
+            "{collisions} snaps looked past a taken point"
+        );
+        assert_eq!(centroidal_relaxation(&cloud, &kept, 1).unwrap(), want);
+    }
+
+    #[test]
     fn fps_owners_are_the_first_assignment() {
         // uniform, clustered and duplicated clouds: FPS's owners are the k-NN assignment, so
         // relaxing from them gives the same selection as relaxing from scratch

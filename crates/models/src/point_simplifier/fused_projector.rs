@@ -425,6 +425,46 @@ mod tests {
     }
 
     #[test]
+    fn grouped_tiles_and_rows_sum_as_one_row_at_a_time_in_input_order() {
+        // widths that leave partial tiles and partial groups: 70 = 4 tiles + 6, 3 < one tile
+        let dev = Device::Cpu;
+        let mut rng = StdRng::seed_from_u64(4);
+        for (input, output) in [(67, 70), (32, 3), (64, 16), (5, 33)] {
+            let values: Vec<f32> = (0..input * output)
+                .map(|_| rng.random_range(-1.0f32..1.0))
+                .collect();
+            let bias: Vec<f32> = (0..output).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let wt = Tensor::from_vec(values.clone(), (input, output), &dev).unwrap();
+            let b = Tensor::from_vec(bias.clone(), output, &dev).unwrap();
+            let affine = HostAffine::from_transposed(&wt, Some(&b)).unwrap();
+            // each output: Σ_i x_i w_io from 0 in input order, then added to the bias
+            let reference = |x: &[f32]| -> Vec<f32> {
+                (0..output)
+                    .map(|o| {
+                        let acc = (0..input).fold(0.0f32, |a, i| a + x[i] * values[i * output + o]);
+                        bias[o] + acc
+                    })
+                    .collect()
+            };
+            let stride = input + 2;
+            for rows in 1..=9 {
+                let xs: Vec<f32> = (0..rows * stride)
+                    .map(|_| rng.random_range(-2.0f32..2.0))
+                    .collect();
+                let mut ys = vec![f32::NAN; rows * output];
+                affine.apply_strided(&xs, stride, &mut ys);
+                for (r, y) in ys.chunks_exact(output).enumerate() {
+                    let x = &xs[r * stride..r * stride + input];
+                    assert_eq!(y, reference(x), "{input}→{output}, row {r} of {rows}");
+                    let mut one = vec![f32::NAN; output];
+                    affine.apply(x, &mut one);
+                    assert_eq!(one, y);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn fused_projector_equals_candle_projector_on_bundled_weights() {
         let model = crate::pretrained::load::<PointSimplifier>("point_simplifier").unwrap();
         let mut rng = StdRng::seed_from_u64(3);
