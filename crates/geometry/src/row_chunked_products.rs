@@ -9,7 +9,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 /// Rows per task: enough work to hide the scheduling, small enough to balance two threads.
-const ROWS_PER_TASK: usize = 4096;
+const ROWS_PER_TASK: usize = 2048;
 
 /// `W ← W − Q (Qᵀ W)`, returning `Qᵀ W` (one classical Gram-Schmidt pass of the columns of `w`
 /// against the orthonormal columns of `q`).
@@ -28,16 +28,18 @@ pub(crate) fn transpose_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f
         .into_par_iter()
         .map(|block| {
             let (start, len) = row_block(a.nrows(), block);
-            let mut c = Mat::zeros(a.ncols(), b.ncols());
+            // As (Bᵀ A)ᵀ: the narrow B is the packed operand and the wide A streams through
+            // (about 10% faster for the Lanczos basis against a block, docs/geometry.md).
+            let mut c = Mat::zeros(b.ncols(), a.ncols());
             matmul(
                 c.as_mut(),
                 Accum::Replace,
-                a.subrows(start, len).transpose(),
-                b.subrows(start, len),
+                b.subrows(start, len).transpose(),
+                a.subrows(start, len),
                 1.0,
                 Par::Seq,
             );
-            c
+            c.transpose().to_owned()
         })
         .collect();
     let mut sum = Mat::zeros(a.ncols(), b.ncols());
