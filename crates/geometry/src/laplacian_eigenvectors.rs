@@ -422,8 +422,8 @@ fn block_lanczos(
                 // Column 0 of the result is `locked` itself: e₀ in the basis' coordinates.
                 let mut selected = Mat::<f64>::zeros(size, want + 1);
                 selected[(0, 0)] = 1.0;
-                for i in 0..want {
-                    selected.col_mut(i + 1).copy_from(s.col(order[i]));
+                for (i, &pair) in order[..want].iter().enumerate() {
+                    selected.col_mut(i + 1).copy_from(s.col(pair));
                 }
                 let vectors = product(basis.subcols(0, size), selected.as_ref());
                 return Ok((theta[..want].to_vec(), vectors));
