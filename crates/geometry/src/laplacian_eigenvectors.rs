@@ -467,12 +467,16 @@ fn next_check_distance(
 /// Appends the columns of `new` to `basis` (within its reserved capacity).
 fn append_columns(basis: &mut Mat<f64>, new: &Mat<f64>) {
     let old = basis.ncols();
-    basis.resize_with(basis.nrows(), old + new.ncols(), |i, j| new[(i, j - old)]);
+    basis.resize_with(basis.nrows(), old + new.ncols(), |_, _| 0.0);
+    basis.subcols_mut(old, new.ncols()).copy_from(new);
 }
 
-/// The Euclidean norm of every column of `w`.
+/// The Euclidean norm of every column of `w`, unscaled (the columns hold values of order one;
+/// faer's overflow-safe `norm_l2` took a fifth of the Lanczos steps' time).
 fn column_norms(w: &Mat<f64>) -> Vec<f64> {
-    (0..w.ncols()).map(|j| w.col(j).norm_l2()).collect()
+    (0..w.ncols())
+        .map(|j| w.col(j).squared_norm_l2().sqrt())
+        .collect()
 }
 
 /// `(H + Hᵀ) / 2`.
