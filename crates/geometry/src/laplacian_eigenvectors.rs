@@ -71,8 +71,10 @@ const TOLERANCE: f64 = 1e-9;
 /// little too high still keeps the smallest eigenvalues nearer the shift than the first
 /// unwanted one.
 const INTERIOR_SHIFT: f64 = 0.45;
-/// Largest Lanczos block.
-const MAX_BLOCK: usize = 24;
+/// Largest Lanczos block: narrower blocks need a smaller basis (fewer vectors to
+/// re-orthogonalise against), wider ones fewer, more efficient steps; with the interior shift
+/// 16 measured best (docs/geometry.md).
+const MAX_BLOCK: usize = 16;
 /// A Gram-Schmidt pass is repeated when a column keeps less than this fraction of its norm:
 /// one pass leaves an orthogonality error of about ε divided by that fraction (every step on
 /// the 41k-vertex bumpy sphere keeps ≥ 0.33, so it takes one pass each).
