@@ -6,27 +6,24 @@
 //!
 //! # Method
 //! With `M` diagonal the problem is the symmetric `A y = λ y`, `A = M^{-1/2} L M^{-1/2}`,
-//! `x = M^{-1/2} y`. Shift-invert around `σ` turns the `λ` nearest `σ` into the `μ = 1/(λ − σ)`
-//! of largest magnitude of `M^{1/2} (L − σM)^{-1} M^{1/2}`; block Lanczos with full
+//! `x = M^{-1/2} y`. Shift-invert around a small negative shift `σ` turns the smallest `λ`
+//! into the largest `μ = 1/(λ − σ)` of `M^{1/2} (L − σM)^{-1} M^{1/2}`; block Lanczos with full
 //! re-orthogonalisation (block classical Gram-Schmidt, a second pass only for a block that
 //! lost most of its norm; each new block orthonormalised by Cholesky QR twice) builds a
-//! Krylov basis, one sparse factorisation of `L − σM` (faer, AMD fill-reducing ordering)
-//! serves every solve, and a dense symmetric eigen-solve of the small projected matrix gives
-//! Ritz pairs; the basis is extended until every wanted Ritz residual is below `1e-9 |μ|`.
-//! Memory is `#V × O(k)`, never `#V²`. The dense products run on fixed blocks of rows and the
-//! solves on fixed groups of columns, in parallel, each sequential inside
-//! (`row_chunked_products`, `sparse_cholesky`): faer's finer-grained parallel kernels made the
-//! solver 2-3× slower than one thread on a 2-core machine (docs/geometry.md), and fixed blocks
-//! keep the result independent of the thread count.
+//! Krylov basis, one sparse Cholesky factorisation of `L − σM` (faer, AMD fill-reducing
+//! ordering) serves every solve, and a dense symmetric eigen-solve of the small projected
+//! matrix gives Ritz pairs; the basis is extended until every wanted Ritz residual is below
+//! `1e-9 μ`. Memory is `#V × O(k)`, never
+//! `#V²`. The dense products run on fixed blocks of rows and the solves on fixed groups of
+//! columns, in parallel, each sequential inside (`row_chunked_products`, `sparse_cholesky`):
+//! faer's finer-grained parallel kernels made the solver 2-3× slower than one thread on a
+//! 2-core machine (docs/geometry.md), and fixed blocks keep the result independent of the
+//! thread count.
 //!
-//! The shift lies inside the wanted spectrum, at 0.45 of Weyl's estimate `4πk/A` of `λ_k`:
-//! the last wanted eigenvalue, the slowest to converge, then has about twice the relative
-//! gap to the first unwanted one that a shift at zero gives it, and the basis shrinks (with
-//! blocks of 24, 577 instead of 721 vectors for 150 pairs of a 44.6k-vertex mesh; 481 with
-//! today's blocks of 16). `L − σM` is then indefinite
-//! and factorised as `L D Lᵀ`; the `k` pairs nearest `σ` are the `k` smallest exactly when
-//! they hold every eigenvalue below `σ`, which the inertia of `D` counts (Sylvester's law), so
-//! the result is checked, and a shift just below zero (`L Lᵀ`, always valid) is the fallback.
+//! The null vector `M^{1/2}·1` (λ = 0) is known and locked at the start of the basis: the
+//! iteration then sees `μ` from `1/λ₁` down, instead of from `1/|σ| ≈ 1e8/λ-scale`, a range
+//! that would amplify rounding along the null vector every step (and made a single
+//! Gram-Schmidt pass diverge on a 4.5k-vertex mesh before the null vector was locked).
 //!
 //! Each connected component is solved on its own (its eigenpairs are those of the whole
 //! operator, and a zero eigenvalue per component would otherwise defeat single-vector
@@ -67,17 +64,8 @@ pub struct LaplacianEigenpairs {
 const DENSE_LIMIT: usize = 600;
 /// Relative Ritz residual accepted for convergence.
 const TOLERANCE: f64 = 1e-9;
-/// The interior shift as a fraction of Weyl's estimate of the largest wanted eigenvalue:
-/// near one half, the wanted eigenvalues lie on both sides of it, and the last of them
-/// (the slowest to converge) is separated from the first unwanted by about twice the relative
-/// gap it has with a shift at zero (docs/geometry.md). Below one half, so that an estimate a
-/// little too high still keeps the smallest eigenvalues nearer the shift than the first
-/// unwanted one.
-const INTERIOR_SHIFT: f64 = 0.45;
-/// Largest Lanczos block: narrower blocks need a smaller basis (fewer vectors to
-/// re-orthogonalise against), wider ones fewer, more efficient steps; with the interior shift
-/// 16 measured best (docs/geometry.md).
-const MAX_BLOCK: usize = 16;
+/// Largest Lanczos block.
+const MAX_BLOCK: usize = 24;
 /// A Gram-Schmidt pass is repeated when a column keeps less than this fraction of its norm:
 /// one pass leaves an orthogonality error of about ε divided by that fraction (every step on
 /// the 41k-vertex bumpy sphere keeps ≥ 0.33, so it takes one pass each).
@@ -207,56 +195,14 @@ fn component_eigenpairs(
     if n <= DENSE_LIMIT {
         return dense_eigenpairs(&entries, &sqrt_mass, want);
     }
-    if want == 1 {
-        return Ok((vec![0.0], null_vector(&sqrt_mass).as_mat().to_owned()));
-    }
-    // Weyl's law for a closed surface of area A, N(λ) ≈ A λ / 4π, estimates λ_want; shifting
-    // to a fraction of it puts the wanted λ on both sides of the shift. A component whose
-    // spectrum is denser (borders, thin parts) can put the shift too high: the inertia check
-    // inside rejects the result, and the shift just below zero is always valid.
-    let area: f64 = sqrt_mass.iter().map(|m| m * m).sum();
-    let weyl = 4.0 * std::f64::consts::PI * want as f64 / area;
-    shift_invert_eigenpairs(&entries, &sqrt_mass, want, INTERIOR_SHIFT * weyl).or_else(|_| {
-        // Shift relative to the typical eigenvalue scale mean(L_ii / M_ii).
-        let scale = entries
-            .iter()
-            .filter(|t| t.row == t.col)
-            .map(|t| t.val / (sqrt_mass[t.row] * sqrt_mass[t.row]))
-            .sum::<f64>()
-            / n as f64;
-        shift_invert_eigenpairs(
-            &entries,
-            &sqrt_mass,
-            want,
-            -1e-8 * scale.max(f64::MIN_POSITIVE),
-        )
-    })
-}
-
-/// The component's null vector `M^{1/2}·1`, normalised (`L·1 = 0`).
-fn null_vector(sqrt_mass: &[f64]) -> faer::Col<f64> {
-    let norm = sqrt_mass.iter().map(|m| m * m).sum::<f64>().sqrt();
-    faer::Col::<f64>::from_fn(sqrt_mass.len(), |i| sqrt_mass[i] / norm)
-}
-
-/// The `want ≥ 2` smallest eigenpairs `(λ ascending, y)` of `M^{-1/2} L M^{-1/2}` (local
-/// `entries` of `L`, `sqrt_mass` = `M^{1/2}`) by shift-invert block Lanczos around `sigma`:
-/// the `want` eigenvalues nearest `sigma`. A shift below zero makes `L − σM` positive
-/// definite (`L Lᵀ`) and the nearest the smallest. A shift inside the spectrum makes it
-/// indefinite (`L D Lᵀ`); the pairs are then accepted only if they hold every eigenvalue
-/// below the shift, counted by Sylvester's law of inertia (the nearest `want` that include all
-/// of those below are the smallest `want`).
-fn shift_invert_eigenpairs(
-    entries: &[Triplet<usize, usize, f64>],
-    sqrt_mass: &[f64],
-    want: usize,
-    sigma: f64,
-) -> Result<(Vec<f64>, Mat<f64>)> {
-    let n = sqrt_mass.len();
-    let failure = |message: String| Error::Solver {
-        solver: "laplacian eigenvectors",
-        message,
-    };
+    // Shift relative to the typical eigenvalue scale mean(L_ii / M_ii).
+    let scale = entries
+        .iter()
+        .filter(|t| t.row == t.col)
+        .map(|t| t.val / (sqrt_mass[t.row] * sqrt_mass[t.row]))
+        .sum::<f64>()
+        / n as f64;
+    let sigma = -1e-8 * scale.max(f64::MIN_POSITIVE);
     let shifted: Vec<Triplet<usize, usize, f64>> = entries
         .iter()
         .map(|t| {
@@ -268,41 +214,35 @@ fn shift_invert_eigenpairs(
             Triplet::new(t.row, t.col, t.val + diagonal)
         })
         .collect();
-    let matrix = SparseColMat::try_new_from_triplets(n, n, &shifted)
-        .map_err(|e| failure(format!("assembling L - σM: {e:?}")))?;
-    let factor = if sigma < 0.0 {
-        SparseCholesky::new(matrix.as_ref())
-    } else {
-        SparseCholesky::new_indefinite(matrix.as_ref())
-    }
-    .map_err(|e| failure(format!("factorising L - σM (σ = {sigma:e}): {e}")))?;
+    let matrix =
+        SparseColMat::try_new_from_triplets(n, n, &shifted).map_err(|e| Error::Solver {
+            solver: "laplacian eigenvectors",
+            message: format!("assembling L - σM: {e:?}"),
+        })?;
+    let factor = SparseCholesky::new(matrix.as_ref()).map_err(|e| Error::Solver {
+        solver: "laplacian eigenvectors",
+        message: format!("Cholesky factorisation of L - σM failed: {e}"),
+    })?;
     // op(Y) = M^{1/2} (L − σM)^{-1} M^{1/2} Y, in place.
     let op = |mut y: Mat<f64>| -> Mat<f64> {
-        scale_rows(&mut y, sqrt_mass);
+        scale_rows(&mut y, &sqrt_mass);
         factor.solve_in_place(y.as_mut());
-        scale_rows(&mut y, sqrt_mass);
+        scale_rows(&mut y, &sqrt_mass);
         y
     };
-    // The null vector y₀ is known: lock it instead of letting Lanczos find it. Below zero the
-    // shift would otherwise make it dominate the operator (1/|σ| ≈ 1e8 against 1/λ₁), and
-    // rounding along it would be amplified that much every step.
-    let (mu, vectors) = block_lanczos(n, want - 1, null_vector(sqrt_mass).as_ref(), op)?;
-    let values: Vec<f64> = std::iter::once(0.0)
+    // The component's null vector y₀ ∝ M^{1/2}·1 (L·1 = 0) is known: lock it instead of
+    // letting Lanczos find it, so the operator the iteration sees spans 1/λ₁ … instead of
+    // 1/|σ| ≈ 1e8 … (rounding along y₀ would be amplified by that range every step).
+    let norm = sqrt_mass.iter().map(|m| m * m).sum::<f64>().sqrt();
+    let null = faer::Col::<f64>::from_fn(n, |i| sqrt_mass[i] / norm);
+    let (mu, vectors) = match want {
+        1 => (Vec::new(), null.as_mat().to_owned()),
+        _ => block_lanczos(n, want - 1, null.as_ref(), op)?,
+    };
+    let values = std::iter::once(0.0)
         .chain(mu.iter().map(|&m| sigma + 1.0 / m))
         .collect();
-    if let Some(negative) = factor.negative_eigenvalues() {
-        // λ₀ = 0 < σ is among the negative eigenvalues of L − σM.
-        let below = values.iter().filter(|&&l| l < sigma).count();
-        if below != negative {
-            return Err(failure(format!(
-                "the shift σ = {sigma:e} has {negative} eigenvalues below it, the pairs found {below}"
-            )));
-        }
-    }
-    let mut order: Vec<usize> = (0..values.len()).collect();
-    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
-    let sorted = Mat::from_fn(n, order.len(), |i, j| vectors[(i, order[j])]);
-    Ok((order.iter().map(|&i| values[i]).collect(), sorted))
+    Ok((values, vectors))
 }
 
 /// Multiplies row `i` of `y` by `factors[i]`.
@@ -337,7 +277,7 @@ fn dense_eigenpairs(
     Ok((values, vectors))
 }
 
-/// The `want` eigenpairs of largest magnitude `(μ by decreasing |μ|, vectors)` of the symmetric
+/// The `want` largest eigenpairs `(μ descending, vectors)` of the symmetric positive definite
 /// operator `op` restricted to the complement of its unit eigenvector `locked`, by block
 /// Lanczos with full re-orthogonalisation; `vectors` is `n×(want + 1)`, `locked` first.
 fn block_lanczos(
@@ -355,8 +295,7 @@ fn block_lanczos(
     let mut rng = StdRng::seed_from_u64(0x5eed_1a9c);
     let mut next = Mat::<f64>::from_fn(n, block, |_, _| rng.random_range(-1.0..1.0));
     // Column 0 holds `locked`; `op` is never applied to it, so its row and column of the
-    // projected matrix stay zero and its Ritz value 0 is never among the wanted (ties in
-    // magnitude go to the later index).
+    // projected matrix stay zero and its Ritz value 0 is never among the wanted.
     basis.col_mut(0).copy_from(locked);
     for _ in 0..2 {
         let c = locked.transpose() * &next;
@@ -407,16 +346,11 @@ fn block_lanczos(
                     message: format!("projected eigen-solve did not converge: {e:?}"),
                 })?;
             let s = eigen.U();
-            // Ritz pairs by decreasing |θ|; the residual of pair i is |R s_i(last block)|.
-            let mut order: Vec<usize> = (0..size).collect();
-            order.sort_by(|&a, &b| {
-                let (ta, tb) = (eigen.S()[a].abs(), eigen.S()[b].abs());
-                tb.total_cmp(&ta).then(b.cmp(&a))
-            });
-            let theta: Vec<f64> = order.iter().map(|&i| eigen.S()[i]).collect();
+            // Ritz values descending; the residual of Ritz pair i is |R s_i(last block)|.
+            let theta: Vec<f64> = (0..size).map(|i| eigen.S()[size - 1 - i]).collect();
             let worst = (0..want)
                 .map(|i| {
-                    let tail = s.col(order[i]).subrows(start, width);
+                    let tail = s.col(size - 1 - i).subrows(start, width);
                     (&r * tail).norm_l2() / theta[i].abs()
                 })
                 .fold(0.0f64, f64::max);
@@ -427,8 +361,8 @@ fn block_lanczos(
                 // Column 0 of the result is `locked` itself: e₀ in the basis' coordinates.
                 let mut selected = Mat::<f64>::zeros(size, want + 1);
                 selected[(0, 0)] = 1.0;
-                for (i, &pair) in order[..want].iter().enumerate() {
-                    selected.col_mut(i + 1).copy_from(s.col(pair));
+                for i in 0..want {
+                    selected.col_mut(i + 1).copy_from(s.col(size - 1 - i));
                 }
                 let vectors = product(basis.subcols(0, size), selected.as_ref());
                 return Ok((theta[..want].to_vec(), vectors));
@@ -476,8 +410,9 @@ fn append_columns(basis: &mut Mat<f64>, new: &Mat<f64>) {
     basis.subcols_mut(old, new.ncols()).copy_from(new);
 }
 
-/// The Euclidean norm of every column of `w`, unscaled (the columns hold values of order one;
-/// faer's overflow-safe `norm_l2` took a fifth of the Lanczos steps' time).
+/// The Euclidean norm of every column of `w`, unscaled (the columns hold values of order
+/// `|μ|`, far from overflow; faer's overflow-safe `norm_l2` took as long as the
+/// re-orthogonalisation products, docs/geometry.md).
 fn column_norms(w: &Mat<f64>) -> Vec<f64> {
     (0..w.ncols())
         .map(|j| w.col(j).squared_norm_l2().sqrt())
@@ -652,8 +587,9 @@ mod tests {
         assert!(gram < 1e-9, "XᵀMX − I: {gram}");
     }
 
-    /// icosphere(3) with a radial bump: 642 vertices, above the dense limit.
-    fn bumpy_sphere() -> TriMesh {
+    #[test]
+    fn lanczos_matches_the_dense_solution() {
+        // 642 vertices: above the dense limit, so the Lanczos path runs.
         let sphere = icosphere(3);
         let bumped: Vec<[f32; 3]> = sphere
             .vertices()
@@ -663,13 +599,12 @@ mod tests {
                 p.map(|x| x * r)
             })
             .collect();
-        sphere.with_vertices(bumped).unwrap()
-    }
-
-    /// The local entries of `L` and `M^{1/2}` of a one-component mesh.
-    fn entries_and_sqrt_mass(mesh: &TriMesh) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
-        let l = cotangent_laplacian(mesh).unwrap();
-        let entries = (0..l.ncols())
+        let mesh = sphere.with_vertices(bumped).unwrap();
+        let k = 40;
+        let pairs = laplacian_eigenvectors(&mesh, k).unwrap();
+        let l = cotangent_laplacian(&mesh).unwrap();
+        let m = lumped_mass_matrix(&mesh);
+        let entries: Vec<Triplet<usize, usize, f64>> = (0..l.ncols())
             .flat_map(|c| {
                 let rows = l.symbolic().row_idx_of_col_raw(c).to_vec();
                 let vals = l.val_of_col(c).to_vec();
@@ -678,62 +613,13 @@ mod tests {
                     .map(move |(r, v)| Triplet::new(r, c, v))
             })
             .collect();
-        let sqrt_mass = lumped_mass_matrix(mesh).iter().map(|x| x.sqrt()).collect();
-        (entries, sqrt_mass)
-    }
-
-    #[test]
-    fn lanczos_matches_the_dense_solution() {
-        let mesh = bumpy_sphere();
-        let k = 40;
-        let pairs = laplacian_eigenvectors(&mesh, k).unwrap();
-        let (entries, sqrt_mass) = entries_and_sqrt_mass(&mesh);
+        let sqrt_mass: Vec<f64> = m.iter().map(|x| x.sqrt()).collect();
         let (dense, _) = dense_eigenpairs(&entries, &sqrt_mass, k).unwrap();
         for (a, b) in pairs.values.iter().zip(&dense) {
             assert!((a - b).abs() < 1e-8 * b.max(1.0), "{a} vs {b}");
         }
         let (residual, gram) = check_pairs(&mesh, &pairs);
         assert!(residual < 1e-6 && gram < 1e-9, "{residual} {gram}");
-    }
-
-    #[test]
-    fn every_valid_shift_gives_the_smallest_pairs_and_a_shift_too_high_is_rejected() {
-        let mesh = bumpy_sphere();
-        let k = 40;
-        let (entries, sqrt_mass) = entries_and_sqrt_mass(&mesh);
-        let (dense, _) = dense_eigenpairs(&entries, &sqrt_mass, k + 1).unwrap();
-        // Valid: below zero (positive definite), and inside the spectrum below the midpoint of
-        // λ₁ and λ_k (indefinite, the wanted on both sides).
-        let midpoint = 0.5 * (dense[1] + dense[k]);
-        for sigma in [-1e-6, 0.3 * dense[k - 1], 0.95 * midpoint] {
-            let (values, vectors) = shift_invert_eigenpairs(&entries, &sqrt_mass, k, sigma)
-                .unwrap_or_else(|e| panic!("σ = {sigma}: {e}"));
-            for (a, b) in values.iter().zip(&dense) {
-                assert!((a - b).abs() < 1e-8 * b.max(1.0), "σ = {sigma}: {a} vs {b}");
-            }
-            let gram = vectors.transpose() * &vectors - Mat::<f64>::identity(k, k);
-            assert!(gram.norm_max() < 1e-9, "σ = {sigma}");
-        }
-        // Too high: the k nearest the shift leave out λ₁, and the inertia count says so.
-        let sigma = 0.6 * dense[k];
-        let error = shift_invert_eigenpairs(&entries, &sqrt_mass, k, sigma).unwrap_err();
-        assert!(
-            error.to_string().contains("eigenvalues below it"),
-            "{error}"
-        );
-    }
-
-    #[test]
-    fn ritz_checks_are_spaced_by_the_extrapolated_residual() {
-        // 4 decades in 48 vectors, 3 more to go: 36 (inside [24, 448/8 = 56]).
-        assert_eq!(next_check_distance(Some((400, 1e-2)), (448, 1e-6), 24), 36);
-        // Far from converged: at most size/8; close: at least a block.
-        assert_eq!(next_check_distance(Some((400, 1e-3)), (448, 1e-5), 24), 56);
-        assert_eq!(next_check_distance(Some((400, 1e-6)), (448, 1e-10), 24), 24);
-        // No earlier check, or a residual that did not fall: size/8 (or a block if larger).
-        assert_eq!(next_check_distance(None, (448, 1e-5), 24), 56);
-        assert_eq!(next_check_distance(Some((400, 1e-6)), (448, 1e-5), 24), 56);
-        assert_eq!(next_check_distance(None, (100, 1e-5), 24), 24);
     }
 
     #[test]
@@ -793,6 +679,19 @@ mod tests {
         assert!((v.transpose() * &v - &identity).norm_max() < 1e-12);
         assert!(r[(5, 5)].abs() < 1e-8 * r[(4, 4)]);
         assert!((&v * &r - &w).norm_max() < 1e-9);
+    }
+
+    #[test]
+    fn ritz_checks_are_spaced_by_the_extrapolated_residual() {
+        // 4 decades in 48 vectors, 3 more to go: 36 (inside [24, 448/8 = 56]).
+        assert_eq!(next_check_distance(Some((400, 1e-2)), (448, 1e-6), 24), 36);
+        // Far from converged: at most size/8; close: at least a block.
+        assert_eq!(next_check_distance(Some((400, 1e-3)), (448, 1e-5), 24), 56);
+        assert_eq!(next_check_distance(Some((400, 1e-6)), (448, 1e-10), 24), 24);
+        // No earlier check, or a residual that did not fall: size/8 (or a block if larger).
+        assert_eq!(next_check_distance(None, (448, 1e-5), 24), 56);
+        assert_eq!(next_check_distance(Some((400, 1e-6)), (448, 1e-5), 24), 56);
+        assert_eq!(next_check_distance(None, (100, 1e-5), 24), 24);
     }
 
     #[test]

@@ -1,10 +1,5 @@
-//! A sparse Cholesky factor (faer, AMD fill-reducing ordering) — `A = L Lᵀ` of a positive
-//! definite `A`, or `A = L D Lᵀ` without pivoting of an indefinite one — whose solves split the
+//! A sparse Cholesky factor `A = L Lᵀ` (faer, AMD fill-reducing ordering) whose solves split the
 //! right-hand sides into fixed-width column groups run in parallel, each group sequential.
-//!
-//! The `L D Lᵀ` form also counts the eigenvalues below zero: by Sylvester's law of inertia `A`
-//! has as many negative eigenvalues as `D` has negative pivots. The eigen-solver's interior
-//! shift uses that count to prove it found every eigenvalue below the shift.
 //!
 //! faer's own parallel solve synchronises inside every supernode; on a small machine whose
 //! cores are shared that made the shift-invert eigen-solver 2-3× slower than one thread
@@ -12,98 +7,54 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SparseColMatRef;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 
-/// Right-hand sides solved together by one thread: a Lanczos block of 16 in two tasks.
-const COLUMNS_PER_TASK: usize = 8;
+/// Right-hand sides solved together by one thread.
+const COLUMNS_PER_TASK: usize = 12;
 
-/// A pivot of `D` this much smaller in magnitude than the largest makes the `L D Lᵀ` factor
-/// unusable: without pivoting, its solves would lose most of their digits.
-const SMALLEST_PIVOT_RATIO: f64 = 1e-10;
-
-/// The Cholesky factor of a symmetric sparse matrix, `L Lᵀ` or `L D Lᵀ`.
+/// The Cholesky factor of a symmetric positive definite sparse matrix.
 pub(crate) struct SparseCholesky {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
-    /// `Some(number of negative pivots)` for `L D Lᵀ`, `None` for `L Lᵀ`.
-    negative_pivots: Option<usize>,
 }
 
 impl SparseCholesky {
-    /// `L Lᵀ` of `matrix` (both triangles stored); fails with faer's message when it is not
+    /// Factorises `matrix` (both triangles stored); fails with faer's message when it is not
     /// numerically positive definite.
     pub(crate) fn new(matrix: SparseColMatRef<'_, usize, f64>) -> Result<Self, String> {
-        let symbolic = symbolic_factor(matrix)?;
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("{e:?}"))?;
         let mut values = vec![0.0; symbolic.len_val()];
-        let mut scratch = MemBuffer::new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-        );
+        let par = Par::Seq;
+        let mut scratch =
+            MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
         symbolic
             .factorize_numeric_llt(
                 &mut values,
                 matrix,
                 Side::Lower,
                 Default::default(),
-                Par::Seq,
+                par,
                 MemStack::new(&mut scratch),
                 Default::default(),
             )
             .map_err(|e| format!("{e:?}"))?;
-        Ok(Self {
-            symbolic,
-            values,
-            negative_pivots: None,
-        })
-    }
-
-    /// `L D Lᵀ` of the symmetric, possibly indefinite `matrix` (both triangles stored), without
-    /// pivoting; fails when a pivot is zero or below `SMALLEST_PIVOT_RATIO` of the largest.
-    pub(crate) fn new_indefinite(matrix: SparseColMatRef<'_, usize, f64>) -> Result<Self, String> {
-        let symbolic = symbolic_factor(matrix)?;
-        let mut values = vec![0.0; symbolic.len_val()];
-        let mut scratch = MemBuffer::new(
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        symbolic
-            .factorize_numeric_ldlt(
-                &mut values,
-                matrix,
-                Side::Lower,
-                Default::default(),
-                Par::Seq,
-                MemStack::new(&mut scratch),
-                Default::default(),
-            )
-            .map_err(|e| format!("{e:?}"))?;
-        let pivots = ldlt_pivots(&symbolic, &values);
-        let largest = pivots.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-        if pivots
-            .iter()
-            .any(|d| d.is_nan() || d.abs() <= SMALLEST_PIVOT_RATIO * largest)
-        {
-            return Err("a pivot of L D Lᵀ is (nearly) zero".into());
-        }
-        let negative = pivots.iter().filter(|&&d| d < 0.0).count();
-        Ok(Self {
-            symbolic,
-            values,
-            negative_pivots: Some(negative),
-        })
-    }
-
-    /// The number of negative eigenvalues of the matrix, known for an `L D Lᵀ` factor.
-    pub(crate) fn negative_eigenvalues(&self) -> Option<usize> {
-        self.negative_pivots
+        Ok(Self { symbolic, values })
     }
 
     /// `rhs ← A⁻¹ rhs`.
     pub(crate) fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let factor = LltRef::new(&self.symbolic, &self.values);
         let mut groups = Vec::new();
         let mut rest = rhs;
         while rest.ncols() > COLUMNS_PER_TASK {
@@ -113,61 +64,10 @@ impl SparseCholesky {
         }
         groups.push(rest);
         groups.into_par_iter().for_each(|group| {
-            let mut scratch = MemBuffer::new(
-                self.symbolic
-                    .solve_in_place_scratch::<f64>(group.ncols(), Par::Seq),
-            );
-            let stack = MemStack::new(&mut scratch);
-            match self.negative_pivots {
-                None => LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
-                    Conj::No,
-                    group,
-                    Par::Seq,
-                    stack,
-                ),
-                Some(_) => LdltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
-                    Conj::No,
-                    group,
-                    Par::Seq,
-                    stack,
-                ),
-            }
+            let mut scratch =
+                MemBuffer::new(factor.solve_in_place_scratch::<f64>(group.ncols(), Par::Seq));
+            factor.solve_in_place_with_conj(Conj::No, group, Par::Seq, MemStack::new(&mut scratch));
         });
-    }
-}
-
-/// The symbolic factor of `matrix`'s pattern with the AMD ordering.
-fn symbolic_factor(
-    matrix: SparseColMatRef<'_, usize, f64>,
-) -> Result<SymbolicCholesky<usize>, String> {
-    factorize_symbolic_cholesky(
-        matrix.symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map_err(|e| format!("{e:?}"))
-}
-
-/// The diagonal `D` of an `L D Lᵀ` factor (faer stores it on the diagonal of `L`: the first
-/// entry of each simplicial column, the diagonal of each supernode's leading block).
-fn ldlt_pivots(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Vec<f64> {
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(simplicial) => {
-            let col_ptr = simplicial.col_ptr();
-            (0..simplicial.ncols())
-                .map(|j| values[col_ptr[j]])
-                .collect()
-        }
-        SymbolicCholeskyRaw::Supernodal(supernodal) => {
-            let factor = SupernodalLdltRef::new(supernodal, values);
-            (0..supernodal.n_supernodes())
-                .flat_map(|s| {
-                    let block = factor.supernode(s).val();
-                    (0..block.ncols()).map(move |i| block[(i, i)])
-                })
-                .collect()
-        }
     }
 }
 
@@ -214,96 +114,5 @@ mod tests {
         let entries = [Triplet::new(0, 0, 1.0), Triplet::new(1, 1, -1.0)];
         let a = SparseColMat::<usize, f64>::try_new_from_triplets(2, 2, &entries).unwrap();
         assert!(SparseCholesky::new(a.as_ref()).is_err());
-    }
-
-    /// The 5-point Laplacian of a `side × side` grid (Dirichlet), shifted by `shift`: its
-    /// eigenvalues are `4 − 2cos(aπ/(side+1)) − 2cos(bπ/(side+1)) − shift`.
-    fn shifted_grid(side: usize, shift: f64) -> (SparseColMat<usize, f64>, usize) {
-        let index = |i: usize, j: usize| i * side + j;
-        let mut entries = Vec::new();
-        for i in 0..side {
-            for j in 0..side {
-                entries.push(Triplet::new(index(i, j), index(i, j), 4.0 - shift));
-                for (di, dj) in [(1, 0), (0, 1)] {
-                    if i + di < side && j + dj < side {
-                        entries.push(Triplet::new(index(i, j), index(i + di, j + dj), -1.0));
-                        entries.push(Triplet::new(index(i + di, j + dj), index(i, j), -1.0));
-                    }
-                }
-            }
-        }
-        let n = side * side;
-        let matrix = SparseColMat::try_new_from_triplets(n, n, &entries).unwrap();
-        let theta =
-            |a: usize| 2.0 - 2.0 * (a as f64 * std::f64::consts::PI / (side + 1) as f64).cos();
-        let negative = (1..=side)
-            .flat_map(|a| (1..=side).map(move |b| (a, b)))
-            .filter(|&(a, b)| theta(a) + theta(b) < shift)
-            .count();
-        (matrix, negative)
-    }
-
-    /// The path Laplacian on `n` vertices (Dirichlet) shifted by `shift`, and its number of
-    /// negative eigenvalues (`2 − 2cos(kπ/(n+1)) − shift`).
-    fn shifted_path(n: usize, shift: f64) -> (SparseColMat<usize, f64>, usize) {
-        let mut entries = Vec::new();
-        for i in 0..n {
-            entries.push(Triplet::new(i, i, 2.0 - shift));
-            if i + 1 < n {
-                entries.push(Triplet::new(i, i + 1, -1.0));
-                entries.push(Triplet::new(i + 1, i, -1.0));
-            }
-        }
-        let negative = (1..=n)
-            .filter(|&k| {
-                2.0 - 2.0 * (k as f64 * std::f64::consts::PI / (n + 1) as f64).cos() < shift
-            })
-            .count();
-        (
-            SparseColMat::try_new_from_triplets(n, n, &entries).unwrap(),
-            negative,
-        )
-    }
-
-    #[test]
-    fn indefinite_factor_counts_the_negative_eigenvalues_and_solves() {
-        // A path and 40 × 40 grids (simplicial factors) and a 150 × 150 grid (supernodal),
-        // shifted inside their spectra.
-        let cases = [
-            shifted_path(300, 1.1),
-            shifted_grid(40, 1.3),
-            shifted_grid(40, 4.07),
-            shifted_grid(40, 7.5),
-            shifted_grid(150, 2.1),
-        ];
-        for (matrix, expected) in cases {
-            let factor = SparseCholesky::new_indefinite(matrix.as_ref()).unwrap();
-            assert_eq!(factor.negative_eigenvalues(), Some(expected));
-            assert!(expected > 0);
-            let rhs = Mat::<f64>::from_fn(matrix.nrows(), 2 * COLUMNS_PER_TASK + 1, |i, j| {
-                ((i * 7 + j * 3) % 11) as f64 - 5.0
-            });
-            let mut x = rhs.clone();
-            factor.solve_in_place(x.as_mut());
-            let residual = (&matrix * &x - &rhs).norm_max() / rhs.norm_max();
-            assert!(residual < 1e-9, "residual {residual}");
-        }
-        // Positive definite input: no negative pivots, and `L Lᵀ` reports no count.
-        let (matrix, _) = shifted_grid(10, -0.5);
-        let factor = SparseCholesky::new_indefinite(matrix.as_ref()).unwrap();
-        assert_eq!(factor.negative_eigenvalues(), Some(0));
-        assert_eq!(
-            SparseCholesky::new(matrix.as_ref())
-                .unwrap()
-                .negative_eigenvalues(),
-            None
-        );
-    }
-
-    #[test]
-    fn a_shift_on_an_eigenvalue_is_an_error() {
-        // side 3: a = b = 2 gives 4 − 0 − 0 = 4, an eigenvalue; the shifted matrix is singular.
-        let (matrix, _) = shifted_grid(3, 4.0);
-        assert!(SparseCholesky::new_indefinite(matrix.as_ref()).is_err());
     }
 }
