@@ -406,8 +406,7 @@ fn next_check_distance(
 /// Appends the columns of `new` to `basis` (within its reserved capacity).
 fn append_columns(basis: &mut Mat<f64>, new: &Mat<f64>) {
     let old = basis.ncols();
-    basis.resize_with(basis.nrows(), old + new.ncols(), |_, _| 0.0);
-    basis.subcols_mut(old, new.ncols()).copy_from(new);
+    basis.resize_with(basis.nrows(), old + new.ncols(), |i, j| new[(i, j - old)]);
 }
 
 /// The Euclidean norm of every column of `w`, unscaled (the columns hold values of order

@@ -39,12 +39,12 @@ pub(crate) fn transpose_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f
                 1.0,
                 Par::Seq,
             );
-            c.transpose().to_owned()
+            c
         })
         .collect();
     let mut sum = Mat::zeros(a.ncols(), b.ncols());
     for c in &partial {
-        sum += c;
+        sum += c.transpose();
     }
     sum
 }
