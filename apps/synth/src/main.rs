@@ -190,8 +190,12 @@ fn hands(
             let label = json!({
                 "age": s.shape.age,
                 "hand_length_mm": s.shape.hand_length(),
+                "gesture": s.gesture.name(),
+                "kept_thumb_fingers_wrist": s.kept,
                 "flexion_rad": s.pose.flexion,
                 "spread_rad": s.pose.spread,
+                "opposition_rad": s.pose.opposition,
+                "wrist_rad": s.pose.wrist,
             });
             (format!("{}.ply", s.name), label)
         })
@@ -214,12 +218,13 @@ fn hands(
     };
     write_manifest(output, &manifest)?;
     let firsts: Vec<TriMesh> = firsts.into_iter().flatten().collect();
+    // From the palm side, three-quarter: fists, pinches and the thumb are seen.
     preview(
         preview_path,
         &firsts,
         View {
-            yaw: 0.0,
-            pitch: -35.0,
+            yaw: 155.0,
+            pitch: -30.0,
         },
     )
 }

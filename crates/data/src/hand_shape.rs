@@ -81,7 +81,7 @@ impl HandShape {
         let palm_width = hand_length * (0.45 + 0.05 * c);
         let palm_thickness = hand_length * (0.145 + 0.03 * c);
         // Finger lengths relative to the middle finger (thumb: metacarpal + 2 phalanges).
-        let relative = [0.95, 0.92, 1.0, 0.95, 0.76];
+        let relative = [1.12, 0.92, 1.0, 0.95, 0.76];
         let split = [
             [0.42, 0.33, 0.25],
             [0.46, 0.30, 0.24],

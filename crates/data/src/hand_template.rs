@@ -3,12 +3,13 @@
 //!
 //! Thesis ch. 3.3: Handy is learned from registered scans that share one template topology
 //! with an open boundary at the wrist cut. Here the cage is a palm tube (16-vertex
-//! cross-section, 4 rings, open at the wrist) capped at the knuckle line by seven quads; the
-//! four finger quads and one palm side quad (thumb) are extruded along each digit's posed bone
-//! chain into square tubes with rounded caps, so the topology is fixed by construction and
-//! every sample differs only in vertex positions. Joint rings take the half rotation of their
-//! joint (a skinning weight of ½ at cage level), and subdivision spreads it into smooth
-//! weights: phalanges rotate rigidly about their joint axes with smooth blends at the joints.
+//! cross-section, 4 rings, open at the wrist, with a transverse arch) capped at the knuckle
+//! line by seven quads; the four finger quads and one radial palm side quad near the wrist
+//! (thumb) are extruded along each digit's posed bone chain into square tubes with rounded
+//! caps, so the topology is fixed by construction and every sample differs only in vertex
+//! positions. Joint rings take the half rotation of their joint (a skinning weight of ½ at
+//! cage level), and subdivision spreads it into smooth weights: phalanges rotate rigidly about
+//! their joint axes with smooth blends at the joints; the wrist bends the palm the same way.
 //!
 //! # Conventions
 //! - Millimetres; wrist centre at the origin, fingers along +y, back of the hand towards +z,
@@ -24,7 +25,10 @@ use crate::catmull_clark::{QuadSubdivision, catmull_clark};
 use crate::error::{Result, invalid};
 use crate::hand_pose::HandPose;
 use crate::hand_shape::HandShape;
-use crate::vec3::{M3, V3, add, axis_angle, column, mul_m, normalize, scale, sub, to_f32, to_f64};
+use crate::vec3::{
+    M3, V3, add, axis_angle, column, cross, mul_m, mul_v, norm, normalize, rotation_fraction,
+    scale, sub, to_f32, to_f64, transpose,
+};
 
 /// Default number of Catmull–Clark levels (2 833 vertices): the template of the bundled
 /// Handy++ model, so `synth hands` and `handy` work together out of the box.
@@ -45,6 +49,8 @@ pub struct HandTemplate {
 struct Cage {
     positions: Vec<V3>,
     quads: Vec<[u32; 4]>,
+    /// Index of each digit's first cage vertex (thumb first).
+    digit_start: [usize; 5],
 }
 
 impl Cage {
@@ -156,6 +162,57 @@ fn digit_rings(
     ]
 }
 
+/// Cage vertices per palm ring (the wrist ring comes first).
+const PALM_RING_VERTICES: usize = 16;
+/// Cage rings per digit (see [`digit_rings`]).
+const RINGS_PER_DIGIT: usize = 6;
+
+/// One cage ring of a digit seen as a cross-section: its centre, the unit direction of its
+/// dorsal (nail) side, and its dorsal and palmar half-thicknesses.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DigitSection {
+    pub centre: V3,
+    pub dorsal: V3,
+    pub dorsal_half: f64,
+    pub palmar_half: f64,
+}
+
+impl DigitSection {
+    /// A point on the limit surface's dorsal (`side = 1`) or palmar (`side = -1`) side: the
+    /// cage corner midpoint pulled in to ¾ of its distance, where Catmull–Clark puts a
+    /// square tube's surface.
+    pub fn surface_point(&self, side: f64) -> V3 {
+        let reach = if side > 0.0 {
+            self.dorsal_half
+        } else {
+            self.palmar_half
+        };
+        add(self.centre, scale(self.dorsal, side * 0.75 * reach))
+    }
+}
+
+/// The cage sections of every digit (thumb first), ring by ring from the base to the cap.
+pub(crate) fn digit_sections(
+    shape: &HandShape,
+    pose: &HandPose,
+) -> [[DigitSection; RINGS_PER_DIGIT]; 5] {
+    let cage = build_cage(shape, pose);
+    std::array::from_fn(|f| {
+        std::array::from_fn(|r| {
+            let at = |k: usize| cage.positions[cage.digit_start[f] + 4 * r + k];
+            let dorsal_mid = scale(add(at(0), at(1)), 0.5);
+            let palmar_mid = scale(add(at(2), at(3)), 0.5);
+            let centre = scale(add(add(at(0), at(1)), add(at(2), at(3))), 0.25);
+            DigitSection {
+                centre,
+                dorsal: normalize(sub(dorsal_mid, palmar_mid)),
+                dorsal_half: norm(sub(dorsal_mid, centre)),
+                palmar_half: norm(sub(palmar_mid, centre)),
+            }
+        })
+    })
+}
+
 /// The cage of `shape` in `pose` (same topology for every input).
 fn build_cage(shape: &HandShape, pose: &HandPose) -> Cage {
     let mut cage = Cage::default();
@@ -179,28 +236,43 @@ fn build_cage(shape: &HandShape, pose: &HandPose) -> Cage {
         };
         xs[c + 1] = xs[c] + width;
     }
-    // Palm rows: (y, width scale, thickness scale).
+    let middle_x = 0.5 * (xs[4] + xs[5]);
+    // Palm rows: (y, width scale, thickness scale, share of the transverse arch). The top
+    // row (the finger webs) follows the knuckle line's arc, lowest at the little finger.
     let rows = [
-        (0.0, 0.80, 0.80),
-        (0.2 * l, 0.92, 0.95),
-        (0.55 * l, 1.0, 1.0),
-        (l, 1.0, 0.80),
+        (0.0, 0.80, 0.80, 0.0),
+        (0.15 * l, 0.92, 0.95, 0.35),
+        (0.5 * l, 1.0, 1.0, 0.8),
+        (l, 1.0, 0.80, 1.0),
     ];
+    // Transverse (metacarpal) arch depth at the palm's edges; cupping deepens it.
+    let arch = w * (0.04 + 0.08 * pose.cupping);
     let mut palm_rings = Vec::with_capacity(rows.len());
-    for &(y, ws, ts) in &rows {
-        let mut idx = [0u32; 16];
-        for i in 0..8 {
-            let x = xs[i] * ws;
+    for (k, &(y, ws, ts, arch_share)) in rows.iter().enumerate() {
+        let mut idx = [0u32; PALM_RING_VERTICES];
+        let point = |i: usize, dorsal: bool| {
             let u = xs[i] / (0.5 * w);
-            let dorsal = 0.5 * t * ts * (1.0 - 0.25 * u * u);
-            idx[i] = cage.vertex([x, y, dorsal]);
-        }
-        for j in 0..8 {
-            let i = 7 - j;
-            let x = xs[i] * ws;
-            let u = xs[i] / (0.5 * w);
-            let palmar = 0.5 * t * ts * (1.0 - 0.15 * u * u);
-            idx[8 + j] = cage.vertex([x, y, -palmar]);
+            let v = (xs[i] - middle_x) / (0.5 * w);
+            let y = if k == rows.len() - 1 {
+                y * (1.0 - 0.07 * v * v)
+            } else {
+                y
+            };
+            let lift = -arch * arch_share * u * u;
+            let z = if dorsal {
+                0.5 * t * ts * (1.0 - 0.25 * u * u)
+            } else {
+                -0.5 * t * ts * (1.0 - 0.15 * u * u)
+            };
+            [xs[i] * ws, y, z + lift]
+        };
+        for (i, slot) in idx.iter_mut().enumerate() {
+            // Dorsal corners left to right, then palmar ones right to left.
+            *slot = if i < 8 {
+                cage.vertex(point(i, true))
+            } else {
+                cage.vertex(point(15 - i, false))
+            };
         }
         palm_rings.push(idx);
     }
@@ -225,7 +297,7 @@ fn build_cage(shape: &HandShape, pose: &HandPose) -> Cage {
             continue;
         }
         let finger = [4usize, 3, 2, 1][c / 2];
-        let corners = base.map(|v| cage.positions.get(v as usize).copied().unwrap_or_default());
+        let corners = base.map(|v| cage.positions[v as usize]);
         let centre = scale(corners.iter().fold([0.0; 3], |acc, &p| add(acc, p)), 0.25);
         // Index (+x side) spreads towards +x: a negative rotation about +z.
         let side = if finger <= 2 { -1.0 } else { 1.0 };
@@ -245,32 +317,104 @@ fn build_cage(shape: &HandShape, pose: &HandPose) -> Cage {
             shape.knuckle,
             shape.fingertip_pad,
         );
+        cage.digit_start[finger] = cage.positions.len();
         cage.extrude(base, &rings);
     }
-    // Thumb from the +x palm side between rows 1 and 2.
+    // Thumb from the radial palm side near the wrist (rows 1-2), its metacarpal in the
+    // thenar eminence: palmar of the palm's mid-plane, pointing out at 25° to the knuckle
+    // line and bent up by `THUMB_REST_MCP` at its MCP, its pad facing the index; opposition
+    // swings it out of the palm plane (palmar abduction) and turns the pad further towards
+    // the fingers.
     let (a, b) = (palm_rings[thumb_row], palm_rings[thumb_row + 1]);
     let base = [a[7], a[8], b[8], b[7]];
-    let corners = base.map(|v| cage.positions.get(v as usize).copied().unwrap_or_default());
+    let corners = base.map(|v| cage.positions[v as usize]);
     let centre = scale(corners.iter().fold([0.0; 3], |acc, &p| add(acc, p)), 0.25);
-    // Local x → −z (palmar), local y → +x (out of the palm side), local z → −y (wristwards).
-    let side_frame: M3 = [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]];
-    let yaw = axis_angle([0.0, 0.0, 1.0], 30f64.to_radians() - pose.spread[0]);
-    let oppose = axis_angle([0.0, 0.0, 1.0], -pose.opposition);
-    let frame = mul_m(&mul_m(&yaw, &side_frame), &oppose);
     let lengths = shape.phalanges[0];
-    let joint = sub(centre, [0.1 * lengths[0], 0.0, 0.0]);
+    let frame = thumb_base_frame(pose);
+    let joint = add(centre, [-0.25 * lengths[0], 0.0, -0.15 * t]);
     let rings = digit_rings(
         joint,
         &frame,
-        [0.95 * lengths[0], lengths[1], lengths[2]],
-        pose.flexion[0],
+        [1.1 * lengths[0], lengths[1], lengths[2]],
+        [
+            pose.flexion[0][0],
+            pose.flexion[0][1] + THUMB_REST_MCP.to_radians(),
+            pose.flexion[0][2],
+        ],
         1.1 * shape.half_width[0],
         shape.taper[0],
         0.6 * shape.knuckle,
         shape.fingertip_pad,
     );
+    // The thenar skin around the thumb's base follows its metacarpal's rotation away from
+    // rest (skinning weights ½ on the base quad, as at the other joints, ¼ on its palmar and
+    // dorsal neighbours), so that the metacarpal does not cut the palm.
+    let rest_metacarpal = thumb_base_frame(&HandPose::rest());
+    let metacarpal = flex(&frame, pose.flexion[0][0]);
+    let rotation = mul_m(&metacarpal, &transpose(&rest_metacarpal));
+    let (half, quarter) = (
+        rotation_fraction(&rotation, 0.5),
+        rotation_fraction(&rotation, 0.25),
+    );
+    let thenar = [a[9], b[9], a[6], b[6]];
+    for (vertices, share) in [(&base, &half), (&thenar, &quarter)] {
+        for &v in vertices {
+            let p = &mut cage.positions[v as usize];
+            *p = add(joint, mul_v(share, sub(*p, joint)));
+        }
+    }
+    cage.digit_start[0] = cage.positions.len();
     cage.extrude(base, &rings);
+    bend_wrist(&mut cage.positions, pose, l);
     cage
+}
+
+/// Flexion of the thumb's MCP in the rest pose, degrees: the metacarpal leaves the palm's
+/// side nearly sideways (a steeper tube would cut the palm), the phalanges point up.
+const THUMB_REST_MCP: f64 = 20.0;
+
+/// The thumb's base frame (columns: flexion axis, direction, nail side) in `pose`.
+fn thumb_base_frame(pose: &HandPose) -> M3 {
+    let phi = 25f64.to_radians() - pose.spread[0];
+    let direction = [phi.cos(), phi.sin(), 0.0];
+    // In the palm plane, perpendicular to the thumb, away from the fingers.
+    let outward = [phi.sin(), -phi.cos(), 0.0];
+    // At rest the thumb is pronated a quarter turn against the fingers: its nail faces away
+    // from them, its flexion axis is the palm normal (the base quad's corners line up).
+    let rest = columns(cross(direction, outward), direction, outward);
+    let abducted = mul_m(&axis_angle(outward, -pose.opposition), &rest);
+    let pronation = axis_angle(column(&abducted, 1), -0.6 * pose.opposition);
+    mul_m(&pronation, &abducted)
+}
+
+/// The matrix with columns `x`, `y`, `z`.
+fn columns(x: V3, y: V3, z: V3) -> M3 {
+    [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]
+}
+
+/// Wrist flexion and deviation about a pivot just above the wrist cut: the cut ring stays,
+/// the next palm ring takes half the rotation (a smooth crease), everything beyond all of it.
+fn bend_wrist(positions: &mut [V3], pose: &HandPose, palm_length: f64) {
+    let [flexion, deviation] = pose.wrist;
+    if flexion == 0.0 && deviation == 0.0 {
+        return;
+    }
+    let rotation = |share: f64| {
+        mul_m(
+            &axis_angle([0.0, 0.0, 1.0], share * deviation),
+            &axis_angle([1.0, 0.0, 0.0], -share * flexion),
+        )
+    };
+    let (half, full) = (rotation(0.5), rotation(1.0));
+    let pivot = [0.0, 0.06 * palm_length, 0.0];
+    for (i, p) in positions.iter_mut().enumerate().skip(PALM_RING_VERTICES) {
+        let r = if i < 2 * PALM_RING_VERTICES {
+            &half
+        } else {
+            &full
+        };
+        *p = add(pivot, mul_v(r, sub(*p, pivot)));
+    }
 }
 
 impl HandTemplate {

@@ -32,6 +32,7 @@ mod expressions;
 mod face_template;
 mod folder_dataset;
 mod hand_dataset;
+mod hand_gesture;
 mod hand_pose;
 mod hand_shape;
 mod hand_template;
@@ -55,8 +56,13 @@ pub use expression_style::ExpressionStyle;
 pub use expressions::{Actions, Expression, apply_actions, apply_styled_actions};
 pub use face_template::{FaceIdentity, FaceTemplate};
 pub use folder_dataset::{FolderDataset, MANIFEST_FILE, Manifest, write_dataset, write_manifest};
-pub use hand_dataset::{CHILD_AGE, HandSample, HandSetConfig, hand_splits};
-pub use hand_pose::{FINGER_FLEXION_DEG, HandPose, OPPOSITION_DEG, SPREAD_DEG, THUMB_FLEXION_DEG};
+pub use hand_dataset::{
+    CHILD_AGE, FreeHand, HandSample, HandSetConfig, SHAPE_DRAWS, hand_splits, relax_until_free,
+};
+pub use hand_gesture::{HandGesture, random_hand_pose};
+pub use hand_pose::{
+    FINGER_FLEXION_DEG, HandPose, OPPOSITION_DEG, SPREAD_DEG, THUMB_FLEXION_DEG, WRIST_DEG,
+};
 pub use hand_shape::{FINGER_NAMES, HandShape};
 pub use hand_template::{DEFAULT_HAND_SUBDIVISIONS, HandTemplate};
 pub use point_preview::{ColoredPoints, point_cloud_sheet, points_on_mesh_sheet, value_colors};

@@ -62,6 +62,24 @@ pub(crate) fn axis_angle(axis: V3, angle: f64) -> M3 {
     ]
 }
 
+/// The transpose of `m` (the inverse of a rotation).
+pub(crate) fn transpose(m: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| m[j][i]))
+}
+
+/// The rotation by `t` times the angle of the rotation `r`, about the same axis (for
+/// rotations of less than a half turn).
+pub(crate) fn rotation_fraction(r: &M3, t: f64) -> M3 {
+    let angle = ((r[0][0] + r[1][1] + r[2][2] - 1.0) / 2.0)
+        .clamp(-1.0, 1.0)
+        .acos();
+    let axis = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    if norm(axis) < 1e-12 {
+        return axis_angle([1.0, 0.0, 0.0], 0.0);
+    }
+    axis_angle(axis, t * angle)
+}
+
 /// `p` widened to `f64`.
 #[inline]
 pub(crate) fn to_f64(p: [f32; 3]) -> V3 {

@@ -1,7 +1,10 @@
 //! Invariants of the synthetic hand set: shared topology, manifold with a single wrist
 //! boundary, no self-intersections, determinism, and non-linearity of articulation (PCA).
 
-use meshgnn_data::{HandPose, HandSetConfig, HandTemplate, self_intersections};
+use meshgnn_data::{
+    HandGesture, HandPose, HandSetConfig, HandShape, HandTemplate, relax_until_free,
+    self_intersections,
+};
 use meshgnn_geometry::{TriMesh, boundary_loops, mesh_report};
 use meshgnn_losses::metrics::compactness;
 
@@ -38,9 +41,7 @@ fn samples_share_topology_and_are_manifold_with_one_wrist_loop() {
 #[test]
 fn generated_hands_do_not_self_intersect() {
     let t = HandTemplate::new(1).unwrap();
-    let rest = t
-        .generate(&meshgnn_data::HandShape::adult(), &HandPose::rest())
-        .unwrap();
+    let rest = t.generate(&HandShape::adult(), &HandPose::rest()).unwrap();
     assert_eq!(self_intersections(&rest), 0);
     for i in 0..8 {
         let s = cfg(1, true).sample(&t, i).unwrap();
@@ -50,30 +51,36 @@ fn generated_hands_do_not_self_intersect() {
 }
 
 #[test]
-fn extreme_poses_within_the_ranges_do_not_self_intersect() {
-    let t = HandTemplate::new(1).unwrap();
-    let shape = meshgnn_data::HandShape::random(30.0, 3).unwrap();
-    let mut fist = HandPose::rest();
-    let mut spread = HandPose::rest();
-    for f in 0..5 {
-        let ranges = if f == 0 {
-            meshgnn_data::THUMB_FLEXION_DEG
-        } else {
-            meshgnn_data::FINGER_FLEXION_DEG
-        };
-        for (j, range) in ranges.iter().enumerate() {
-            fist.flexion[f][j] = range[1].to_radians();
-        }
-        spread.spread[f] = meshgnn_data::SPREAD_DEG[f][1].to_radians();
+fn every_gesture_and_the_range_limits_come_out_free_of_self_intersections() {
+    let t = HandTemplate::new(2).unwrap();
+    let cfg = cfg(2, true);
+    let mut seen = std::collections::HashSet::new();
+    for i in 0..40 {
+        let s = cfg.sample(&t, i).unwrap();
+        seen.insert(s.gesture);
+        let mesh = TriMesh::new(s.vertices, t.triangles().to_vec()).unwrap();
+        assert_eq!(self_intersections(&mesh), 0, "hand {i} {:?}", s.gesture);
+        assert!(s.pose.in_range(), "hand {i}");
     }
-    fist.opposition = meshgnn_data::OPPOSITION_DEG[1].to_radians();
-    for pose in [fist, spread] {
-        assert!(pose.in_range());
-        assert_eq!(
-            self_intersections(&t.generate(&shape, &pose).unwrap()),
-            0,
-            "{pose:?}"
-        );
+    assert_eq!(seen.len(), HandGesture::ALL.len(), "{seen:?}");
+    // A shape that intersects itself even at rest is reported, to be drawn again.
+    let folded = HandShape::random(1.0, 0).unwrap();
+    assert!(self_intersections(&t.generate(&folded, &HandPose::rest()).unwrap()) > 0);
+    assert!(
+        relax_until_free(&t, &folded, &HandPose::rest())
+            .unwrap()
+            .is_none()
+    );
+    // The wrist at its limits, the hand flat or spread.
+    let shape = HandShape::random(30.0, 3).unwrap();
+    for gesture in [HandGesture::Flat, HandGesture::Spread] {
+        for wrist in [[-40.0, -15.0], [50.0, 25.0], [50.0, -15.0], [-40.0, 25.0]] {
+            let mut pose = gesture.pose(&shape);
+            pose.wrist = wrist.map(f64::to_radians);
+            assert!(pose.in_range());
+            let mesh = t.generate(&shape, &pose).unwrap();
+            assert_eq!(self_intersections(&mesh), 0, "{gesture:?} wrist {wrist:?}");
+        }
     }
 }
 

@@ -40,7 +40,7 @@ pub use count_bounds::{
 pub use error::{Error, Result};
 pub use handy::spiral;
 pub use handy::{
-    BATCH_SHAPES, ChamferDirection, HandModel, LATENT_GAUSSIAN_KEY, LatentGaussian,
+    BATCH_SHAPES, ChamferDirection, HandModel, LATENT_GAUSSIAN_KEY, LATENT_MODES, LatentGaussian,
     LoadedHandModel, MorphableModel, PCA_MODEL_NAME, Pca, SPECIFICITY_SAMPLES, ScanDistances,
     ScanFit, ScanFitOptions, SimilarityTransform, check_registered, decode_latents, encode_shapes,
     fit_scan, generalisation_error, interpolate_shapes, latent_gaussian, partial_scan,

@@ -137,17 +137,14 @@ pub fn evaluate_hand_model(
         )),
         None => None,
     };
+    // Each model's prior: the Gaussian (and modes) of its own training codes; the PCA's
+    // whitened codes have mean 0 and covariance I up to the ridge.
     let gaussian = latent_gaussian(model, splits.train)?;
+    let pca_gaussian = latent_gaussian(&pca, splits.train)?;
     let (samples, seed) = (options.specificity_samples, options.seed);
     let specificity = (
         specificity_error(model, splits.train, &gaussian, samples, seed)?,
-        specificity_error(
-            &pca,
-            splits.train,
-            &LatentGaussian::standard(z),
-            samples,
-            seed,
-        )?,
+        specificity_error(&pca, splits.train, &pca_gaussian, samples, seed)?,
     );
     let count = options.fit_scans.min(splits.test.len());
     let fitting = if count > 0 {
@@ -159,13 +156,7 @@ pub fn evaluate_hand_model(
             ..Default::default()
         };
         let model_fit = fit_all(model, &gaussian, &scans, &fit_options, fitted)?;
-        let pca_fit = fit_all(
-            &pca,
-            &LatentGaussian::standard(z),
-            &scans,
-            &fit_options,
-            fitted,
-        )?;
+        let pca_fit = fit_all(&pca, &pca_gaussian, &scans, &fit_options, fitted)?;
         let points = scans.iter().map(|s| s.scan.len()).sum::<usize>() as f64;
         Some(ScanFitting {
             scans: count,

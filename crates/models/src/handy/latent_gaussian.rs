@@ -13,13 +13,18 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::{Error, Result};
 
-/// `N(μ, L Lᵀ)` over latent codes of size `Z`.
+/// `N(μ, L Lᵀ)` over latent codes of size `Z`, with the modes of the codes it was fitted to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LatentGaussian {
     mean: Vec<f64>,
     /// Lower-triangular Cholesky factor `L`, `Z×Z` row-major.
     cholesky: Vec<f64>,
+    /// Means of the k-means clusters of the fitted codes (see [`LatentGaussian::modes`]).
+    modes: Vec<Vec<f64>>,
 }
+
+/// Number of k-means clusters [`LatentGaussian::fit`] keeps as modes.
+pub const LATENT_MODES: usize = 16;
 
 fn invalid(what: &str, reason: impl Into<String>) -> Error {
     Error::Invalid {
@@ -61,10 +66,12 @@ impl LatentGaussian {
         Self {
             mean: vec![0.0; latent],
             cholesky,
+            modes: Vec::new(),
         }
     }
 
-    /// Fits mean and covariance to `latents` (`N` codes of size `Z`, `N ≥ 2`).
+    /// Fits mean and covariance to `latents` (`N` codes of size `Z`, `N ≥ 2`), and keeps the
+    /// means of [`LATENT_MODES`] k-means clusters of them as modes.
     ///
     /// ```
     /// use meshgnn_models::LatentGaussian;
@@ -113,13 +120,14 @@ impl LatentGaussian {
             }
         }
         Ok(Self {
+            modes: k_means(latents, &mean, LATENT_MODES),
             mean,
             cholesky: cholesky(&cov, z)?,
         })
     }
 
-    /// Builds a Gaussian from `mean: Z` and its lower Cholesky factor `cholesky: Z×Z`
-    /// (row-major), e.g. as read from a model file.
+    /// Builds a Gaussian (without modes) from `mean: Z` and its lower Cholesky factor
+    /// `cholesky: Z×Z` (row-major), e.g. as read from a model file.
     pub fn from_parts(mean: Vec<f64>, cholesky: Vec<f64>) -> Result<Self> {
         let z = mean.len();
         if z == 0 || cholesky.len() != z * z {
@@ -139,7 +147,20 @@ impl LatentGaussian {
                 "the factor needs a positive diagonal and finite entries",
             ));
         }
-        Ok(Self { mean, cholesky })
+        Ok(Self {
+            mean,
+            cholesky,
+            modes: Vec::new(),
+        })
+    }
+
+    /// The means of k-means clusters of the codes the Gaussian was fitted to, `K×Z`: where
+    /// the training shapes gather (for hands, the pose clusters: fists, pinches, open hands),
+    /// which a unimodal Gaussian blurs into one mean. Scan fitting starts from them (see
+    /// `ScanFitOptions::global_init`). Empty when built from parts or read from a file
+    /// written before modes were kept.
+    pub fn modes(&self) -> &[Vec<f64>] {
+        &self.modes
     }
 
     /// Size `Z` of the codes.
@@ -212,13 +233,15 @@ impl LatentGaussian {
             .collect()
     }
 
-    /// The Gaussian as JSON `{"cholesky": [..], "mean": [..]}` (how a hand model file stores
-    /// it: the entry [`crate::LATENT_GAUSSIAN_KEY`]).
+    /// The Gaussian as JSON `{"cholesky": [..], "mean": [..], "modes": [[..], ..]}` (how a
+    /// hand model file stores it: the entry [`crate::LATENT_GAUSSIAN_KEY`]).
     pub fn to_json(&self) -> String {
-        serde_json::json!({"mean": self.mean, "cholesky": self.cholesky}).to_string()
+        serde_json::json!({"mean": self.mean, "cholesky": self.cholesky, "modes": self.modes})
+            .to_string()
     }
 
-    /// Reads [`LatentGaussian::to_json`]'s text; errors name the missing or malformed key.
+    /// Reads [`LatentGaussian::to_json`]'s text (`modes` may be absent); errors name the
+    /// missing or malformed key.
     ///
     /// ```
     /// use meshgnn_models::LatentGaussian;
@@ -243,13 +266,134 @@ impl LatentGaussian {
                 })
                 .collect()
         };
-        Self::from_parts(list("mean")?, list("cholesky")?)
+        let gaussian = Self::from_parts(list("mean")?, list("cholesky")?)?;
+        let modes: Vec<Vec<f64>> = match value.get("modes") {
+            None => Vec::new(),
+            Some(m) => serde_json::from_value(m.clone())
+                .map_err(|e| invalid("latent Gaussian", format!("`modes`: {e}")))?,
+        };
+        let z = gaussian.latent_size();
+        if modes
+            .iter()
+            .any(|m| m.len() != z || m.iter().any(|c| !c.is_finite()))
+        {
+            return Err(invalid(
+                "latent Gaussian",
+                format!("`modes` must hold finite codes of size {z}"),
+            ));
+        }
+        Ok(Self { modes, ..gaussian })
     }
+}
+
+/// The means of `k` clusters of `codes` (fewer when there are fewer distinct codes) by Lloyd's
+/// k-means: started from the code nearest `mean` and then, one by one, the code farthest from
+/// the centres so far (deterministic), 50 iterations at most.
+fn k_means(codes: &[Vec<f32>], mean: &[f64], k: usize) -> Vec<Vec<f64>> {
+    let points: Vec<Vec<f64>> = codes
+        .iter()
+        .map(|c| c.iter().map(|&x| f64::from(x)).collect())
+        .collect();
+    let distance =
+        |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum() };
+    let nearest_to = |target: &[f64], from: &[Vec<f64>]| -> (usize, f64) {
+        from.iter()
+            .map(|c| distance(target, c))
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 0.0))
+    };
+    let mut centres = vec![points[nearest_to(mean, &points).0].clone()];
+    while centres.len() < k {
+        let (farthest, gap) = points
+            .iter()
+            .map(|p| nearest_to(p, &centres).1)
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 0.0));
+        if gap <= 0.0 {
+            break;
+        }
+        centres.push(points[farthest].clone());
+    }
+    for _ in 0..50 {
+        let mut sums = vec![vec![0.0; mean.len()]; centres.len()];
+        let mut counts = vec![0usize; centres.len()];
+        for p in &points {
+            let c = nearest_to(p, &centres).0;
+            counts[c] += 1;
+            for (s, x) in sums[c].iter_mut().zip(p) {
+                *s += x;
+            }
+        }
+        let moved: Vec<Vec<f64>> = sums
+            .into_iter()
+            .zip(&counts)
+            .zip(&centres)
+            .map(|((s, &n), old)| {
+                if n == 0 {
+                    old.clone()
+                } else {
+                    s.into_iter().map(|x| x / n as f64).collect()
+                }
+            })
+            .collect();
+        if moved == centres {
+            break;
+        }
+        centres = moved;
+    }
+    centres
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn modes_are_the_centres_of_well_separated_clusters() {
+        // Three tight clusters in 2-d (sizes 30, 20, 10) around known centres.
+        let centres = [[0.0f32, 0.0], [10.0, 0.0], [0.0, 10.0]];
+        let codes: Vec<Vec<f32>> = [30, 20, 10]
+            .iter()
+            .zip(centres)
+            .flat_map(|(&n, c)| {
+                (0..n).map(move |i| {
+                    let t = i as f32;
+                    vec![c[0] + 0.1 * (t * 0.7).sin(), c[1] + 0.1 * (t * 1.3).cos()]
+                })
+            })
+            .collect();
+        let mean = [10.0 * 20.0 / 60.0, 10.0 * 10.0 / 60.0];
+        let modes = k_means(&codes, &mean, 3);
+        assert_eq!(modes.len(), 3);
+        for c in centres {
+            let nearest = modes
+                .iter()
+                .map(|m| {
+                    ((m[0] - f64::from(c[0])).powi(2) + (m[1] - f64::from(c[1])).powi(2)).sqrt()
+                })
+                .fold(f64::MAX, f64::min);
+            assert!(nearest < 0.1, "{c:?} {modes:?}");
+        }
+        // Fewer distinct codes than clusters: one mode per code.
+        assert_eq!(
+            k_means(&[vec![1.0], vec![1.0], vec![2.0]], &[1.3], 8).len(),
+            2
+        );
+        let g = LatentGaussian::fit(&codes).unwrap();
+        assert_eq!(g.modes().len(), LATENT_MODES);
+        // JSON keeps the modes (to the last bits of the decimal text).
+        let back = LatentGaussian::from_json(&g.to_json()).unwrap();
+        for (a, b) in back
+            .modes()
+            .iter()
+            .flatten()
+            .zip(g.modes().iter().flatten())
+        {
+            assert!((a - b).abs() <= 1e-14 * b.abs().max(1.0), "{a} {b}");
+        }
+    }
 
     #[test]
     fn sample_covariance_matches_the_fit() {

@@ -23,7 +23,7 @@ pub use hand_evaluation::{
     ScanFitting, evaluate_hand_model,
 };
 pub use hand_model::{HandModel, LATENT_GAUSSIAN_KEY, LoadedHandModel, check_registered};
-pub use latent_gaussian::LatentGaussian;
+pub use latent_gaussian::{LATENT_MODES, LatentGaussian};
 pub use latent_interpolation::interpolate_shapes;
 pub use morphable_evaluation::{
     SPECIFICITY_SAMPLES, generalisation_error, latent_gaussian, specificity_error,

@@ -8,8 +8,8 @@
 //!   shape, `R` from a quaternion (any non-zero 4-vector, normalised inside the formula, so
 //!   the gradient is smooth everywhere), `s = s₀ exp(σ)`, `t = t₀ + r₀ τ`: every optimised
 //!   number (`z`, `q`, `σ`, `τ`) is dimensionless, so one Adam learning rate fits them all.
-//! - Initialisation: the mean code (zero, or the prior's mean), identity rotation, `t₀` the
-//!   scan's centroid, `s₀` the ratio of the scan's and the mean shape's RMS radii (or 1).
+//! - Initialisation: the mean code (zero, or the prior's mean; with the global start, also the
+//!   prior's modes), identity rotation (or the global start's), `t₀` the scan's centroid, `s₀` the ratio of the scan's and the mean shape's RMS radii (or 1).
 //! - Loss: Chamfer (mean of squared nearest-vertex distances) divided by `r₀²` (`r₀` the RMS
 //!   radius of the mean shape times `s₀`), plus `prior_weight · ‖L⁻¹ (z − μ)‖² / Z` when a
 //!   latent Gaussian is given. [`ChamferDirection::ScanToModel`] keeps only the scan → model
@@ -66,11 +66,13 @@ pub struct ScanFitOptions {
     /// model's visible vertices. Without it a one-sided scan can settle *between* the model's
     /// front and back surfaces.
     pub view_direction: Option<[f32; 3]>,
-    /// For scans in any orientation and handedness (beyond the thesis, whose scans are
-    /// aligned): starts from the identity and from the four rotations that align the model's
-    /// principal axes with the scan's, each on the scan and on its mirror image (a left hand
-    /// for a right-hand model); every start runs a fifth of the steps, and the one with the
-    /// lowest loss is fitted again with all of them.
+    /// For scans in any orientation, handedness and pose (beyond the thesis, whose scans are
+    /// aligned): starting codes are the prior's mean and its modes (the pose clusters of the
+    /// training codes, [`LatentGaussian::modes`]); each is turned by the identity and by the
+    /// four rotations that align its shape's principal axes with the scan's, on the scan and
+    /// on its mirror image (a left hand for a right-hand model). Every start is probed by its
+    /// loss after one step, the best four run a fifth of the steps, and the two with the
+    /// lowest loss are fitted again with all of them (the lower final loss is kept).
     pub global_init: bool,
 }
 
@@ -297,8 +299,11 @@ fn facing_vertices(vertices: &[[f32; 3]], triangles: &[[u32; 3]], d: [f32; 3]) -
 
 /// Ch. 3.4.4: fits `model` to `scan: #P×3` (partial and noisy allowed) by optimising a latent
 /// code and a similarity transform with Adam (see the module conventions); `prior` (the
-/// Gaussian of the training codes) regularises the code. Returns the fitted vertices in scan
-/// space and R2S / S2R against the whole scan.
+/// Gaussian of the training codes) regularises the code. When the prior has modes (pose
+/// clusters), each is a starting code too: every start is probed by its loss after one step,
+/// the best four run a fifth of the steps and the best two of those are fitted with
+/// all of them (with `global_init`, over rotations and the mirror image as well). Returns the
+/// fitted vertices in scan space and R2S / S2R against the whole scan.
 ///
 /// ```
 /// use meshgnn_geometry::icosphere;
@@ -318,10 +323,6 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     prior: Option<&LatentGaussian>,
     options: &ScanFitOptions,
 ) -> Result<ScanFit> {
-    const IDENTITY: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
-    if !options.global_init {
-        return fit_from(model, scan, prior, options, IDENTITY);
-    }
     let mirror = |points: &[[f32; 3]]| -> Vec<[f32; 3]> {
         points.iter().map(|p| [-p[0], p[1], p[2]]).collect()
     };
@@ -331,28 +332,77 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
         view_direction: options.view_direction.map(|d| [-d[0], d[1], d[2]]),
         ..*options
     };
-    let (_, mean) = mean_shape(model, prior)?;
-    let mut best: Option<(f64, bool, [f64; 4])> = None;
-    for (mirrored, points, opts) in [
+    let both_sides = [
         (false, scan, options),
         (true, &mirrored_scan[..], &mirrored_options),
-    ] {
+    ];
+    let sides = if options.global_init {
+        &both_sides[..]
+    } else {
+        &both_sides[..1]
+    };
+    let modes = prior.map(LatentGaussian::modes).unwrap_or_default();
+    if sides.len() == 1 && modes.is_empty() {
+        let start = FitStart {
+            code: mean_code(model, prior),
+            rotation: IDENTITY_ROTATION,
+        };
+        return fit_from(model, scan, prior, options, &start);
+    }
+    // Probe every start by its loss after one step: the mean code and each mode of the
+    // training codes (pose clusters); with the global start each is also turned onto the
+    // scan (and onto its mirror image) by the four principal-axis alignments of its shape.
+    let codes = std::iter::once(mean_code(model, prior))
+        .chain(modes.iter().map(|m| m.iter().map(|&c| c as f32).collect()));
+    let mut probes: Vec<(f64, bool, FitStart)> = Vec::new();
+    for code in codes {
+        let shape = decoded(model, &code)?;
+        for &(mirrored, points, opts) in sides {
+            let probe = ScanFitOptions { steps: 1, ..*opts };
+            let rotations = if options.global_init {
+                starting_rotations(&shape, points)
+            } else {
+                vec![IDENTITY_ROTATION]
+            };
+            for rotation in rotations {
+                let start = FitStart {
+                    code: code.clone(),
+                    rotation,
+                };
+                let loss = fit_from(model, points, prior, &probe, &start)?.loss;
+                probes.push((loss, mirrored, start));
+            }
+        }
+    }
+    probes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    probes.truncate(SCREENED_STARTS);
+    // Screen the most promising with a fifth of the steps; fit the best few with all of them
+    // and keep the lowest final loss.
+    let mut screened = Vec::with_capacity(probes.len());
+    for (_, mirrored, start) in probes {
+        let (_, points, opts) = sides[usize::from(mirrored)];
         let screening = ScanFitOptions {
             steps: (options.steps / 5).max(1),
             ..*opts
         };
-        for start in starting_rotations(&mean, points) {
-            let loss = fit_from(model, points, prior, &screening, start)?.loss;
-            if best.is_none_or(|(lowest, ..)| loss < lowest) {
-                best = Some((loss, mirrored, start));
-            }
+        let loss = fit_from(model, points, prior, &screening, &start)?.loss;
+        screened.push((loss, mirrored, start));
+    }
+    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut best: Option<(bool, ScanFit)> = None;
+    for (_, mirrored, start) in screened.into_iter().take(FINALISTS) {
+        let (_, points, opts) = sides[usize::from(mirrored)];
+        let fit = fit_from(model, points, prior, opts, &start)?;
+        if best.as_ref().is_none_or(|(_, b)| fit.loss < b.loss) {
+            best = Some((mirrored, fit));
         }
     }
-    let (_, mirrored, start) = best.unwrap_or((0.0, false, IDENTITY));
+    let Some((mirrored, fit)) = best else {
+        return Err(invalid("scan fit", "no starting point"));
+    };
     if !mirrored {
-        return fit_from(model, scan, prior, options, start);
+        return Ok(fit);
     }
-    let fit = fit_from(model, &mirrored_scan, prior, &mirrored_options, start)?;
     Ok(ScanFit {
         vertices: mirror(&fit.vertices),
         mirrored: true,
@@ -360,32 +410,52 @@ pub fn fit_scan<M: MorphableModel + ?Sized>(
     })
 }
 
-/// The latent code the fit starts from (zero, or the prior's mean) and its decoded shape.
-fn mean_shape<M: MorphableModel + ?Sized>(
-    model: &M,
-    prior: Option<&LatentGaussian>,
-) -> Result<(Vec<f32>, Vec<[f32; 3]>)> {
-    let z_size = model.latent_size();
-    let z0: Vec<f32> = prior.map_or(vec![0.0; z_size], |p| {
+/// How many of the probed starts are screened with a fifth of the steps.
+const SCREENED_STARTS: usize = 4;
+
+/// How many of the screened starts are fitted with all the steps (the lowest final loss is
+/// kept): a fist fitted upside down can lead after a fifth of the steps and lose at the end.
+const FINALISTS: usize = 2;
+
+/// The unit quaternion of the identity rotation.
+const IDENTITY_ROTATION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
+
+/// Where one fit starts: a latent code and a rotation (a unit quaternion).
+#[derive(Debug, Clone)]
+struct FitStart {
+    code: Vec<f32>,
+    rotation: [f64; 4],
+}
+
+/// The latent code the fit starts from by default: zero, or the prior's mean.
+fn mean_code<M: MorphableModel + ?Sized>(model: &M, prior: Option<&LatentGaussian>) -> Vec<f32> {
+    prior.map_or(vec![0.0; model.latent_size()], |p| {
         p.mean().iter().map(|&m| m as f32).collect()
-    });
-    let shape = unflatten_points(
+    })
+}
+
+/// The shape `#V×3` the model decodes from `code`.
+fn decoded<M: MorphableModel + ?Sized>(model: &M, code: &[f32]) -> Result<Vec<[f32; 3]>> {
+    Ok(unflatten_points(
         &model
-            .decode(&Tensor::from_vec(z0.clone(), (1, z_size), &Device::Cpu)?)?
+            .decode(&Tensor::from_vec(
+                code.to_vec(),
+                (1, code.len()),
+                &Device::Cpu,
+            )?)?
             .to_dtype(DType::F32)?
             .flatten_all()?
             .to_vec1::<f32>()?,
-    );
-    Ok((z0, shape))
+    ))
 }
 
-/// One fit from the rotation `start` (a unit quaternion); see [`fit_scan`].
+/// One fit from `start`; see [`fit_scan`].
 fn fit_from<M: MorphableModel + ?Sized>(
     model: &M,
     scan: &[[f32; 3]],
     prior: Option<&LatentGaussian>,
     options: &ScanFitOptions,
-    start: [f64; 4],
+    start: &FitStart,
 ) -> Result<ScanFit> {
     if scan.len() < 3 {
         return Err(invalid(
@@ -418,10 +488,19 @@ fn fit_from<M: MorphableModel + ?Sized>(
             ),
         ));
     }
+    if start.code.len() != z_size {
+        return Err(invalid(
+            "starting code",
+            format!(
+                "size {}, the model's latent size is {z_size}",
+                start.code.len()
+            ),
+        ));
+    }
     let dev = Device::Cpu;
-    let (z0, mean_shape) = mean_shape(model, prior)?;
-    let c = centroid(&mean_shape);
-    let model_radius = rms_radius(&mean_shape);
+    let start_shape = decoded(model, &start.code)?;
+    let c = centroid(&start_shape);
+    let model_radius = rms_radius(&start_shape);
     let scan_radius = rms_radius(scan);
     if model_radius.is_nan() || model_radius <= 0.0 || scan_radius.is_nan() || scan_radius <= 0.0 {
         return Err(invalid(
@@ -440,10 +519,10 @@ fn fit_from<M: MorphableModel + ?Sized>(
         // the mean shape turned to the start
         Some(d) => {
             let turn = SimilarityTransform {
-                rotation: start,
+                rotation: start.rotation,
                 ..SimilarityTransform::IDENTITY
             };
-            let turned: Vec<[f32; 3]> = mean_shape
+            let turned: Vec<[f32; 3]> = start_shape
                 .iter()
                 .map(|p| {
                     let q = turn.apply(std::array::from_fn(|k| (f64::from(p[k]) - c[k]) as f32));
@@ -472,8 +551,8 @@ fn fit_from<M: MorphableModel + ?Sized>(
     };
     let scan_t = Tensor::from_vec(flatten_points(&sub), (sub.len(), 3), &dev)?;
 
-    let z = Var::from_tensor(&Tensor::from_vec(z0, (1, z_size), &dev)?)?;
-    let q = Var::from_tensor(&Tensor::new(&start.map(|x| x as f32), &dev)?)?;
+    let z = Var::from_tensor(&Tensor::from_vec(start.code.clone(), (1, z_size), &dev)?)?;
+    let q = Var::from_tensor(&Tensor::new(&start.rotation.map(|x| x as f32), &dev)?)?;
     let log_s = Var::from_tensor(&Tensor::zeros(1, DType::F32, &dev)?)?;
     let tau = Var::from_tensor(&Tensor::zeros((1, 3), DType::F32, &dev)?)?;
     let mut vars = vec![
@@ -732,6 +811,56 @@ mod tests {
             plain.distances,
             fit.distances
         );
+    }
+
+    #[test]
+    fn global_init_starts_from_the_modes_of_the_prior() {
+        // Training codes in two clusters, the second far from the mean; a turned scan of the
+        // far cluster's shape is recovered from the mode nearest it.
+        let pca = model();
+        let far = [2.5f32, -2.0, 1.5];
+        let codes: Vec<Vec<f32>> = (0..60)
+            .map(|i| {
+                let t = i as f32;
+                let jitter = [
+                    0.05 * (t * 0.7).sin(),
+                    0.05 * (t * 1.1).cos(),
+                    0.05 * (t * 1.9).sin(),
+                ];
+                let centre = if i < 40 { [0.0; 3] } else { far };
+                std::array::from_fn::<f32, 3, _>(|k| centre[k] + jitter[k]).to_vec()
+            })
+            .collect();
+        let prior = LatentGaussian::fit(&codes).unwrap();
+        let gap = |m: &Vec<f64>| -> f64 {
+            m.iter()
+                .zip(far)
+                .map(|(a, b)| (a - f64::from(b)).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        assert!(
+            prior.modes().iter().any(|m| gap(m) < 0.1),
+            "{:?}",
+            prior.modes()
+        );
+        let x = crate::handy::shape_batches::decode_latents(&pca, &[far.to_vec()]).unwrap();
+        let turn = SimilarityTransform::from_axis_angle(
+            1.0,
+            [0.2, 1.0, -0.4],
+            120f64.to_radians(),
+            [0.1, -0.3, 0.2],
+        );
+        let scan: Vec<[f32; 3]> = x[0].iter().map(|&p| turn.apply(p)).collect();
+        let options = ScanFitOptions {
+            steps: 400,
+            global_init: true,
+            ..Default::default()
+        };
+        let fit = fit_scan(&pca, &scan, Some(&prior), &options).unwrap();
+        let err = meshgnn_losses::metrics::per_vertex_error(&fit.vertices, &scan).unwrap();
+        assert!(err < 0.02, "per-vertex error {err}");
+        assert!(!fit.mirrored);
     }
 
     #[test]
