@@ -8,8 +8,9 @@
 //!   shape, `R` from a quaternion (any non-zero 4-vector, normalised inside the formula, so
 //!   the gradient is smooth everywhere), `s = s₀ exp(σ)`, `t = t₀ + r₀ τ`: every optimised
 //!   number (`z`, `q`, `σ`, `τ`) is dimensionless, so one Adam learning rate fits them all.
-//! - Initialisation: the mean code (zero, or the prior's mean; with the global start, also the
-//!   prior's modes), identity rotation (or the global start's), `t₀` the scan's centroid, `s₀` the ratio of the scan's and the mean shape's RMS radii (or 1).
+//! - Initialisation: the mean code (zero, or the prior's mean) and the prior's modes, each
+//!   probed (see [`fit_scan`]); identity rotation (or the global start's); `t₀` the scan's
+//!   centroid; `s₀` the ratio of the scan's and the start shape's RMS radii (or 1).
 //! - Loss: Chamfer (mean of squared nearest-vertex distances) divided by `r₀²` (`r₀` the RMS
 //!   radius of the mean shape times `s₀`), plus `prior_weight · ‖L⁻¹ (z − μ)‖² / Z` when a
 //!   latent Gaussian is given. [`ChamferDirection::ScanToModel`] keeps only the scan → model
@@ -28,6 +29,7 @@ use crate::handy::morphable_evaluation::rms_radius;
 use crate::handy::morphable_model::MorphableModel;
 use crate::handy::scan_distances::{ScanDistances, scan_distances};
 use crate::handy::scan_orientation::starting_rotations;
+use crate::handy::shape_batches::decode_latents;
 use crate::tensor_file::{flatten_points, unflatten_points};
 use crate::{Error, Result};
 
@@ -436,17 +438,9 @@ fn mean_code<M: MorphableModel + ?Sized>(model: &M, prior: Option<&LatentGaussia
 
 /// The shape `#V×3` the model decodes from `code`.
 fn decoded<M: MorphableModel + ?Sized>(model: &M, code: &[f32]) -> Result<Vec<[f32; 3]>> {
-    Ok(unflatten_points(
-        &model
-            .decode(&Tensor::from_vec(
-                code.to_vec(),
-                (1, code.len()),
-                &Device::Cpu,
-            )?)?
-            .to_dtype(DType::F32)?
-            .flatten_all()?
-            .to_vec1::<f32>()?,
-    ))
+    Ok(decode_latents(model, &[code.to_vec()])?
+        .pop()
+        .unwrap_or_default())
 }
 
 /// One fit from `start`; see [`fit_scan`].
