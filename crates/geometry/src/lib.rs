@@ -50,6 +50,7 @@ mod surface_sampling;
 mod symmetric_eigen3;
 mod tangent_chart_triangulation;
 mod vertex_normals;
+mod voronoi_dual;
 mod watertight;
 
 pub use error::{Error, Result};
@@ -106,4 +107,5 @@ pub use tangent_chart_triangulation::{
     Reconstruction, TangentChartOptions, tangent_chart_triangulation,
 };
 pub use vertex_normals::vertex_normals;
+pub use voronoi_dual::{geodesic_voronoi_regions, voronoi_dual_triangles};
 pub use watertight::is_watertight;

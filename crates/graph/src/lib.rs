@@ -13,6 +13,7 @@ mod mesh_hierarchy;
 mod pooling_matrices;
 mod qem;
 
+mod balanced_sampling;
 mod candidate_triangles;
 mod centroidal_relaxation;
 mod csr_matrix;
@@ -35,6 +36,7 @@ pub use qem::{
     decimate_with_progress, qem_vertices,
 };
 
+pub use balanced_sampling::balanced_sampling;
 pub use candidate_triangles::candidate_triangles;
 pub use centroidal_relaxation::{centroidal_relaxation, centroidal_relaxation_indexed};
 pub use csr_matrix::CsrMatrix;

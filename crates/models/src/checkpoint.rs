@@ -272,11 +272,11 @@ pub(crate) fn checkpoint_of(path: &Path, error: Error) -> Error {
 }
 
 /// Checks that a model read from `source` to resume training was trained with the requested
-/// config and on a template with the requested faces.
-pub(crate) fn check_resumable<C: PartialEq + std::fmt::Debug>(
+/// config.
+pub(crate) fn check_same_config<C: PartialEq + std::fmt::Debug>(
     source: &Path,
-    (config, triangles): (&C, &[[u32; 3]]),
-    (requested, requested_triangles): (&C, &[[u32; 3]]),
+    config: &C,
+    requested: &C,
 ) -> Result<()> {
     if config != requested {
         return Err(checkpoint_error(
@@ -284,6 +284,16 @@ pub(crate) fn check_resumable<C: PartialEq + std::fmt::Debug>(
             format!("was trained with {config:?}, not the requested {requested:?}"),
         ));
     }
+    Ok(())
+}
+
+/// [`check_same_config`], and on a template with the requested faces.
+pub(crate) fn check_resumable<C: PartialEq + std::fmt::Debug>(
+    source: &Path,
+    (config, triangles): (&C, &[[u32; 3]]),
+    (requested, requested_triangles): (&C, &[[u32; 3]]),
+) -> Result<()> {
+    check_same_config(source, config, requested)?;
     if triangles != requested_triangles {
         return Err(checkpoint_error(
             source,
@@ -312,6 +322,15 @@ pub(crate) fn zero_vars(vars: &candle_nn::VarMap, prefixes: &[String]) -> Result
         }
     }
     Ok(())
+}
+
+/// A checkpoint of every variable of `vars` (detached, by name) under `header`.
+pub(crate) fn vars_checkpoint(header: CheckpointHeader, vars: &candle_nn::VarMap) -> Checkpoint {
+    let tensors = crate::sorted_vars(vars)
+        .into_iter()
+        .map(|(n, v)| (n, v.as_detached_tensor()))
+        .collect();
+    Checkpoint { header, tensors }
 }
 
 /// Sets every variable of `vars` from the tensor of the same name in `tensors`; errors name a

@@ -10,6 +10,7 @@
 use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
+use super::candidate_features::CANDIDATE_FEATURES;
 use super::{FaceGraph, TriConv, TriConvConfig};
 use crate::{Error, Result};
 
@@ -52,7 +53,7 @@ impl FaceClassifier {
     /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
     /// let classifier = FaceClassifier::new(vb, &FaceClassifierConfig::default())?;
     /// let mesh = meshgnn_geometry::icosphere(1);
-    /// let graph = FaceGraph::new(mesh.vertices(), mesh.triangles(), 20, &Device::Cpu)?;
+    /// let graph = FaceGraph::new(mesh.vertices(), mesh.vertices(), mesh.triangles(), 20, &Device::Cpu)?;
     /// let prior = Tensor::full(0.5f32, 80, &Device::Cpu)?;
     /// assert_eq!(classifier.forward(&prior, &graph)?.dims(), &[80]);
     /// # Ok::<(), meshgnn_models::Error>(())
@@ -67,7 +68,11 @@ impl FaceClassifier {
         let layers = (0..config.layers)
             .map(|l| {
                 let widths = TriConvConfig {
-                    input: if l == 0 { 1 } else { config.hidden },
+                    input: if l == 0 {
+                        1 + CANDIDATE_FEATURES
+                    } else {
+                        config.hidden
+                    },
                     output: config.hidden,
                 };
                 TriConv::new(vb.pp(format!("layers.{l}")), &widths)
@@ -80,7 +85,7 @@ impl FaceClassifier {
     /// `p_t` of every candidate: `prior: (F)` (eq. 6.5) over the triangles of `graph` → `(F)`
     /// in (0, 1).
     pub fn forward(&self, prior: &Tensor, graph: &FaceGraph) -> Result<Tensor> {
-        let mut features = prior.unsqueeze(1)?;
+        let mut features = Tensor::cat(&[&prior.unsqueeze(1)?, &graph.features], 1)?;
         for layer in &self.layers {
             features = layer.forward(&features, graph)?.relu()?;
         }
@@ -104,7 +109,15 @@ mod tests {
         };
         let classifier = FaceClassifier::new(vb, &config).unwrap();
         let mesh = meshgnn_geometry::icosphere(2);
-        let graph = FaceGraph::new(mesh.vertices(), mesh.triangles(), 20, &Device::Cpu).unwrap();
+        // The unit sphere's positions are its normals.
+        let graph = FaceGraph::new(
+            mesh.vertices(),
+            mesh.vertices(),
+            mesh.triangles(),
+            20,
+            &Device::Cpu,
+        )
+        .unwrap();
         let prior: Vec<f32> = (0..320).map(|i| (i % 7) as f32 / 7.0).collect();
         let prior = Tensor::from_vec(prior, 320, &Device::Cpu).unwrap();
         let p = classifier.forward(&prior, &graph).unwrap();

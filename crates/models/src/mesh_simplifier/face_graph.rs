@@ -5,7 +5,8 @@
 //! the per-coordinate maximum (minimum) of the triangle's edge vectors `e_ij = x_i − x_j`,
 //! `e_ik`, `e_jk` (corners `i < j < k` as the candidates list them) and `b` its barycentre.
 //!
-//! The encoding depends on positions only, so it is computed once on the host.
+//! The encoding depends on positions only, so it is computed once on the host, with the
+//! candidates' geometric features ([`super::candidate_features`]).
 //!
 //! # Conventions
 //! - `neighbours`: `(F·K)` `u32`, row-major; `relative`: `(F·K, 9)`.
@@ -14,6 +15,7 @@
 use candle_core::{Device, Tensor};
 use meshgnn_graph::{triangle_barycentres, triangle_knn_graph};
 
+use super::candidate_features::{CANDIDATE_FEATURES, candidate_features};
 use crate::Result;
 
 /// Links between candidate triangles and their eq. 6.6 encodings.
@@ -21,6 +23,8 @@ use crate::Result;
 pub struct FaceGraph {
     pub(crate) neighbours: Tensor,
     pub(crate) relative: Tensor,
+    /// `(F, CANDIDATE_FEATURES)`.
+    pub(crate) features: Tensor,
     len: usize,
     width: usize,
 }
@@ -38,19 +42,22 @@ fn edge_extremes(corners: [[f32; 3]; 3]) -> [f32; 6] {
 }
 
 impl FaceGraph {
-    /// The graph of `triangles` (indices into `vertices`), each linked to its `k` nearest
-    /// (by barycentre; fewer when there are not `k + 1` candidates).
+    /// The graph of `triangles` (indices into `vertices`, whose unit `normals` are the input
+    /// surface's there), each linked to its `k` nearest (by barycentre; fewer when there are
+    /// not `k + 1` candidates).
     ///
     /// ```
     /// use candle_core::Device;
     /// use meshgnn_models::mesh_simplifier::FaceGraph;
     /// let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
-    /// let g = FaceGraph::new(&v, &[[0, 1, 2], [1, 2, 3]], 20, &Device::Cpu)?;
+    /// let n = [[0.0, 0.0, 1.0]; 4];
+    /// let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [1, 2, 3]], 20, &Device::Cpu)?;
     /// assert_eq!((g.len(), g.width()), (2, 1));
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
     pub fn new(
         vertices: &[[f32; 3]],
+        normals: &[[f32; 3]],
         triangles: &[[u32; 3]],
         k: usize,
         device: &Device,
@@ -74,9 +81,11 @@ impl FaceGraph {
                 relative.extend((0..3).map(|c| centres[n][c] - centres[m][c]));
             }
         }
+        let features = candidate_features(vertices, normals, triangles)?;
         Ok(Self {
             neighbours: Tensor::from_vec(neighbours, len * width, device)?,
             relative: Tensor::from_vec(relative, (len * width, 9), device)?,
+            features: Tensor::from_vec(features, (len, CANDIDATE_FEATURES), device)?,
             len,
             width,
         })
@@ -110,7 +119,8 @@ mod tests {
             [0.0, 2.0, 0.0],
             [0.0, 0.0, 3.0],
         ];
-        let g = FaceGraph::new(&v, &[[0, 1, 2], [0, 1, 3]], 5, &Device::Cpu).unwrap();
+        let n = [[0.0, 0.0, 1.0]; 4];
+        let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [0, 1, 3]], 5, &Device::Cpu).unwrap();
         // t0: e01 = (-2,0,0), e02 = (0,-2,0), e12 = (2,-2,0) → min (-2,-2,0), max (2,0,0),
         //     barycentre (2/3, 2/3, 0).
         // t1: e01 = (-2,0,0), e03 = (0,0,-3), e13 = (2,0,-3) → min (-2,0,-3), max (2,0,0),
@@ -123,7 +133,7 @@ mod tests {
         for (a, b) in r[0].iter().zip(&r[1]) {
             assert!((a + b).abs() < 1e-6, "r(1,0) = −r(0,1)");
         }
-        let one = FaceGraph::new(&v, &[[0, 1, 2]], 5, &Device::Cpu).unwrap();
+        let one = FaceGraph::new(&v, &n, &[[0, 1, 2]], 5, &Device::Cpu).unwrap();
         assert_eq!((one.len(), one.width()), (1, 0));
     }
 }

@@ -2,11 +2,15 @@
 //! and a face classifier, trained end to end): the DevConv layer (eq. 6.1) on fixed-width
 //! neighbour slots, the point sampler (ch. 6.3.1), the edge predictor with its candidate
 //! triangles (ch. 6.3.2, eq. 6.2-6.5), the face classifier with its TriConv layer (ch. 6.3.3,
-//! eq. 6.6-6.7), the model that chains them with the final manifold pass, and the eq. 6.14
-//! objective of one pass. Not yet here: the training run, bundled weights and the
-//! `meshsimplify --method neural` app.
+//! eq. 6.6-6.7), the model that chains them with the final manifold pass, the eq. 6.14
+//! objective of one pass, and the supervised training that replaces it (Voronoi-dual targets
+//! for edges and faces, QEM importance for the sampler: [`SimplifierTraining`]). Not yet here:
+//! bundled weights and the `meshsimplify --method neural` app.
 
+mod candidate_features;
+mod checkpoint;
 mod dev_conv;
+mod dual_targets;
 mod edge_predictor;
 mod extended_graph;
 mod face_classifier;
@@ -15,9 +19,13 @@ mod neighbour_slots;
 mod neural_mesh_simplifier;
 mod point_sampler;
 mod simplification_loss;
+mod simplifier_training;
 mod tri_conv;
 
+pub use candidate_features::{CANDIDATE_FEATURES, candidate_features};
+pub use checkpoint::NEURAL_MESH_SIMPLIFIER_NAME;
 pub use dev_conv::{DevConv, DevConvConfig};
+pub use dual_targets::DualTargets;
 pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePredictorConfig};
 pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
@@ -30,5 +38,8 @@ pub use neural_mesh_simplifier::{
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{
     PENALTY_NEIGHBOURS, SimplificationTarget, simplification_loss, simplification_terms,
+};
+pub use simplifier_training::{
+    SimplifierExample, SimplifierLosses, SimplifierTraining, VALIDATION_RATIOS, qem_importance,
 };
 pub use tri_conv::{TriConv, TriConvConfig};

@@ -65,16 +65,30 @@ impl TriConv {
                 features.device(),
             )?);
         }
-        let channels = features.dim(1)?;
-        let own = features
-            .unsqueeze(1)?
-            .broadcast_as((f, k, channels))?
-            .reshape((f * k, channels))?;
-        let others = features.index_select(&graph.neighbours, 0)?;
+        // The first layer on `[r ‖ f_n − f_k]` is `W_r r + W_f f_n − W_f f_k + b`: `W_f f` once
+        // per triangle, not per link. The second layer is affine, so it commutes with the
+        // mean over the links and runs once per triangle too. Equal to the printed order of
+        // operations up to rounding, about twenty times fewer multiplications at k = 20.
+        let first = &self.mlp[0];
+        let weight = first.weight();
+        let relative_weight = weight.narrow(1, 0, 9)?;
+        let feature_weight = weight.narrow(1, 9, weight.dim(1)? - 9)?;
+        let projected = features.matmul(&feature_weight.t()?)?;
         let relative = graph.relative.to_dtype(features.dtype())?;
-        let input = Tensor::cat(&[&relative, &(own - others)?], 1)?;
-        let messages = self.mlp[1].forward(&self.mlp[0].forward(&input)?.relu()?)?;
-        Ok(messages.reshape((f, k, output))?.mean(D::Minus2)?)
+        let mut hidden = relative
+            .matmul(&relative_weight.t()?)?
+            .reshape((f, k, output))?
+            .broadcast_add(&projected.unsqueeze(1)?)?
+            .sub(
+                &projected
+                    .index_select(&graph.neighbours, 0)?
+                    .reshape((f, k, output))?,
+            )?;
+        if let Some(bias) = first.bias() {
+            hidden = hidden.broadcast_add(bias)?;
+        }
+        let mean = hidden.relu()?.mean(D::Minus2)?;
+        Ok(self.mlp[1].forward(&mean)?)
     }
 }
 
@@ -110,9 +124,10 @@ mod tests {
         )
         .unwrap();
         let (v, t) = strip();
-        let graph = FaceGraph::new(&v, &t, 3, &Device::Cpu).unwrap();
+        let up = vec![[0.0, 0.0, 1.0]; v.len()];
+        let graph = FaceGraph::new(&v, &up, &t, 3, &Device::Cpu).unwrap();
         let moved: Vec<[f32; 3]> = v.iter().map(|p| [p[0] + 5.0, p[1] - 2.0, p[2]]).collect();
-        let moved = FaceGraph::new(&moved, &t, 3, &Device::Cpu).unwrap();
+        let moved = FaceGraph::new(&moved, &up, &t, 3, &Device::Cpu).unwrap();
         let f0: Vec<f64> = (0..12).map(|i| ((i * 7 % 5) as f64 - 2.0) * 0.3).collect();
         let x = Tensor::from_slice(&f0, (6, 2), &Device::Cpu).unwrap();
         let a: Vec<Vec<f64>> = conv.forward(&x, &graph).unwrap().to_vec2().unwrap();
@@ -133,6 +148,45 @@ mod tests {
     }
 
     #[test]
+    fn the_reordered_layer_equals_eq_6_7_in_its_printed_order() {
+        let map = VarMap::new();
+        let vb = VarBuilder::from_varmap(&map, DType::F64, &Device::Cpu);
+        let conv = TriConv::new(
+            vb,
+            &TriConvConfig {
+                input: 3,
+                output: 5,
+            },
+        )
+        .unwrap();
+        let (v, t) = strip();
+        let up = vec![[0.0, 0.0, 1.0]; v.len()];
+        let graph = FaceGraph::new(&v, &up, &t, 3, &Device::Cpu).unwrap();
+        let f0: Vec<f64> = (0..18).map(|i| ((i * 5 % 7) as f64 - 3.0) * 0.4).collect();
+        let x = Tensor::from_slice(&f0, (6, 3), &Device::Cpu).unwrap();
+        // MLP([r_nk ‖ f_n − f_k]) per link, then the mean over the links.
+        let (f, k) = (graph.len(), graph.width());
+        let own = x.unsqueeze(1).unwrap().broadcast_as((f, k, 3)).unwrap();
+        let own = own.reshape((f * k, 3)).unwrap();
+        let others = x.index_select(&graph.neighbours, 0).unwrap();
+        let relative = graph.relative.to_dtype(DType::F64).unwrap();
+        let input = Tensor::cat(&[&relative, &(own - others).unwrap()], 1).unwrap();
+        let hidden = conv.mlp[0].forward(&input).unwrap().relu().unwrap();
+        let messages = conv.mlp[1].forward(&hidden).unwrap();
+        let printed: Vec<Vec<f64>> = messages
+            .reshape((f, k, 5))
+            .unwrap()
+            .mean(1)
+            .unwrap()
+            .to_vec2()
+            .unwrap();
+        let got: Vec<Vec<f64>> = conv.forward(&x, &graph).unwrap().to_vec2().unwrap();
+        for (p, q) in printed.iter().flatten().zip(got.iter().flatten()) {
+            assert!((p - q).abs() < 1e-12, "{p} vs {q}");
+        }
+    }
+
+    #[test]
     fn a_lone_triangle_gets_zeros() {
         let map = VarMap::new();
         let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
@@ -145,7 +199,8 @@ mod tests {
         )
         .unwrap();
         let (v, _) = strip();
-        let graph = FaceGraph::new(&v, &[[0, 1, 2]], 20, &Device::Cpu).unwrap();
+        let up = vec![[0.0, 0.0, 1.0]; v.len()];
+        let graph = FaceGraph::new(&v, &up, &[[0, 1, 2]], 20, &Device::Cpu).unwrap();
         let x = Tensor::ones((1, 1), DType::F32, &Device::Cpu).unwrap();
         let y: Vec<Vec<f32>> = conv.forward(&x, &graph).unwrap().to_vec2().unwrap();
         assert_eq!(y, vec![vec![0.0; 3]]);

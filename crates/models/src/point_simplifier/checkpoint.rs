@@ -11,7 +11,7 @@ use candle_nn::VarBuilder;
 use serde_json::{Map, Value};
 
 use super::{PointSimplifier, PointSimplifierConfig, SelectorSpace};
-use crate::checkpoint::{checkpoint_error, read_file};
+use crate::checkpoint::{checkpoint_error, checkpoint_of, read_file};
 use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
 
 /// The model's name in checkpoints.
@@ -81,10 +81,7 @@ impl PointSimplifier {
 
 impl LoadCheckpoint for PointSimplifier {
     fn from_checkpoint_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
-        Self::from_safetensors(bytes, source).map_err(|e| match e {
-            Error::Checkpoint { .. } => e,
-            other => checkpoint_error(source, other.to_string()),
-        })
+        Self::from_safetensors(bytes, source).map_err(|e| checkpoint_of(source, e))
     }
 }
 

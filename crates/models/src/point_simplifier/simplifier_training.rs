@@ -27,7 +27,8 @@ use super::{
     PointSimplifierConfig, simplifier_loss,
 };
 use crate::adam::sorted_vars;
-use crate::training::{BatchLoss, StepContext, Trainable};
+use crate::checkpoint::{check_same_config, checkpoint_of, set_vars, vars_checkpoint};
+use crate::training::{BatchLoss, StepContext, Trainable, batch_mean};
 use crate::{Checkpoint, Error, Result};
 
 /// Target ratios of the validation figure: those of the benchmark (thesis Table 5.1).
@@ -281,7 +282,7 @@ impl Trainable for SimplifierTraining {
     fn batch_loss(&self, batch: &[usize], context: &StepContext) -> Result<BatchLoss> {
         let mut rng =
             StdRng::seed_from_u64(context.seed ^ context.step.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        let mut total: Option<Tensor> = None;
+        let mut losses = Vec::with_capacity(batch.len());
         for &i in batch {
             let sample = self.train.get(i).ok_or_else(|| Error::Invalid {
                 what: format!("training cloud {i}"),
@@ -291,22 +292,12 @@ impl Trainable for SimplifierTraining {
             let n = sample.points.len();
             let target = ((ratio * n as f64).round() as usize).clamp(1, n);
             let fps_seed: u64 = rng.random();
-            let loss = self.loss(sample, target, fps_seed, true)?;
-            total = Some(match total {
-                None => loss,
-                Some(t) => (t + loss)?,
-            });
+            losses.push(self.loss(sample, target, fps_seed, true)?);
         }
-        let loss = total.ok_or_else(|| Error::Invalid {
-            what: "training batch".into(),
-            reason: "empty".into(),
-        })?;
-        let loss = if batch.len() == 1 {
-            loss
-        } else {
-            loss.affine(1.0 / batch.len() as f64, 0.0)?
-        };
-        Ok(BatchLoss { loss, figure: None })
+        Ok(BatchLoss {
+            loss: batch_mean(losses)?,
+            figure: None,
+        })
     }
 
     fn validation(&self) -> Result<Option<f64>> {
@@ -317,36 +308,14 @@ impl Trainable for SimplifierTraining {
     }
 
     fn checkpoint(&self) -> Result<Checkpoint> {
-        let tensors = sorted_vars(&self.varmap)
-            .into_iter()
-            .map(|(n, v)| (n, v.as_detached_tensor()))
-            .collect();
-        Ok(Checkpoint {
-            header: self.config.header(),
-            tensors,
-        })
+        Ok(vars_checkpoint(self.config.header(), &self.varmap))
     }
 
-    /// Every model tensor (weights and batch-norm statistics) from the checkpoint, which must
-    /// hold this config.
+    /// Every model tensor from the checkpoint, which must hold this config.
     fn restore(&mut self, checkpoint: &Checkpoint, source: &Path) -> Result<()> {
         let config = PointSimplifierConfig::from_header(&checkpoint.header, source)?;
-        if config != self.config {
-            return Err(crate::checkpoint::checkpoint_error(
-                source,
-                format!(
-                    "was trained with {config:?}, not the requested {:?}",
-                    self.config
-                ),
-            ));
-        }
-        for (name, var) in sorted_vars(&self.varmap) {
-            let t = checkpoint.tensors.get(&name).ok_or_else(|| {
-                crate::checkpoint::checkpoint_error(source, format!("tensor {name:?} is missing"))
-            })?;
-            var.set(t)?;
-        }
-        Ok(())
+        check_same_config(source, &config, &self.config)?;
+        set_vars(&self.varmap, &checkpoint.tensors).map_err(|e| checkpoint_of(source, e))
     }
 }
 

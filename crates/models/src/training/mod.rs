@@ -8,5 +8,5 @@
 mod trainable;
 mod training_loop;
 
-pub use trainable::{BatchLoss, StepContext, Trainable};
+pub use trainable::{BatchLoss, StepContext, Trainable, batch_mean};
 pub use training_loop::{TrainingConfig, TrainingProgress, TrainingRun, epoch_order, train};

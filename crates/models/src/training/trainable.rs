@@ -55,3 +55,19 @@ pub trait Trainable {
     /// `checkpoint`, read from `source`; errors when it holds a different configuration.
     fn restore(&mut self, checkpoint: &Checkpoint, source: &Path) -> Result<()>;
 }
+
+/// The mean of the per-example `losses` of a batch (0-d tensors); errors on an empty batch.
+pub fn batch_mean(losses: Vec<Tensor>) -> Result<Tensor> {
+    let count = losses.len();
+    let mut sum = losses.into_iter();
+    let first = sum.next().ok_or_else(|| crate::Error::Invalid {
+        what: "training batch".into(),
+        reason: "empty".into(),
+    })?;
+    let total = sum.try_fold(first, |t, l| t + l)?;
+    Ok(if count == 1 {
+        total
+    } else {
+        total.affine(1.0 / count as f64, 0.0)?
+    })
+}

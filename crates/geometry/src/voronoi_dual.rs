@@ -1,0 +1,162 @@
+//! The triangulation dual to a geodesic Voronoi partition of a mesh's vertices: each vertex
+//! joins the region of its nearest seed along mesh edges (multi-source Dijkstra, ties to the
+//! lower seed), and every face whose three corners lie in three different regions becomes the
+//! triangle of those three seeds, oriented as the face. This is the restricted Delaunay
+//! triangulation that clustering remeshers (ACVD) output; the neural mesh simplifier trains its
+//! edge predictor and face classifier to propose it among the sampled vertices, where the
+//! probabilities of eq. 6.14 alone collapse to an empty mesh.
+//!
+//! For a dense, evenly spread set of seeds the dual is a closed manifold of the input's
+//! topology; for sparse or clumped seeds a region may not be a disc and the dual can carry
+//! non-manifold edges or holes (the neural simplifier's manifold pass removes those).
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+
+use crate::error::{Error, Result};
+use crate::tri_mesh::TriMesh;
+use crate::vec3::{norm, sub, to_f64};
+
+/// The region (index into `seeds`) of every vertex; `u32::MAX` for vertices no seed reaches.
+/// Errors when a seed is out of range or repeated.
+pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
+    let n = mesh.vertex_count();
+    let mut region = vec![u32::MAX; n];
+    for (s, &v) in seeds.iter().enumerate() {
+        let slot = region.get_mut(v as usize).ok_or(Error::IndexOutOfRange {
+            element: "seed",
+            index: s,
+            target: "vertex",
+            value: u64::from(v),
+            count: n,
+        })?;
+        if *slot != u32::MAX {
+            return Err(Error::InvalidParameter {
+                name: "seeds",
+                message: format!("vertex {v} given twice"),
+            });
+        }
+        *slot = s as u32;
+    }
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in mesh.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            neighbours[a as usize].push(b);
+            neighbours[b as usize].push(a);
+        }
+    }
+    let v = mesh.vertices();
+    let mut distance = vec![f64::INFINITY; n];
+    // Keys are (distance bits, seed): non-negative f64 order as their bit patterns, and the
+    // seed breaks ties so the partition does not depend on the heap's internals.
+    let mut heap = BinaryHeap::new();
+    for (s, &seed) in seeds.iter().enumerate() {
+        distance[seed as usize] = 0.0;
+        heap.push(Reverse((0u64, s as u32, seed)));
+    }
+    while let Some(Reverse((bits, s, u))) = heap.pop() {
+        let d = f64::from_bits(bits);
+        if d > distance[u as usize] || region[u as usize] != s {
+            continue;
+        }
+        for &w in &neighbours[u as usize] {
+            let step = norm(sub(to_f64(v[w as usize]), to_f64(v[u as usize])));
+            let candidate = d + step;
+            let better = candidate < distance[w as usize]
+                || (candidate == distance[w as usize] && s < region[w as usize]);
+            if better {
+                distance[w as usize] = candidate;
+                region[w as usize] = s;
+                heap.push(Reverse((candidate.to_bits(), s, w)));
+            }
+        }
+    }
+    Ok(region)
+}
+
+/// The dual triangles of [`geodesic_voronoi_regions`] in seed numbering (`[a, b, c]` indexes
+/// `seeds`), each once (the first face that produces it sets its orientation), in face order.
+///
+/// ```
+/// use meshgnn_geometry::{icosphere, voronoi_dual_triangles};
+/// let sphere = icosphere(2);
+/// // Every vertex a seed: the dual is the mesh itself.
+/// let all: Vec<u32> = (0..sphere.vertex_count() as u32).collect();
+/// assert_eq!(voronoi_dual_triangles(&sphere, &all)?, sphere.triangles());
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn voronoi_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32; 3]>> {
+    let region = geodesic_voronoi_regions(mesh, seeds)?;
+    let mut seen = HashMap::new();
+    let mut triangles = Vec::new();
+    for t in mesh.triangles() {
+        let r = t.map(|c| region[c as usize]);
+        if r.contains(&u32::MAX) || r[0] == r[1] || r[1] == r[2] || r[0] == r[2] {
+            continue;
+        }
+        let mut key = r;
+        key.sort_unstable();
+        seen.entry(key).or_insert_with(|| {
+            triangles.push(r);
+        });
+    }
+    Ok(triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{icosphere, is_edge_manifold, is_watertight};
+
+    #[test]
+    fn a_strip_of_four_regions_gives_two_triangles() {
+        // A 4×2 grid of vertices, two triangles per cell; seeds at the four corners.
+        let v: Vec<[f32; 3]> = (0..2)
+            .flat_map(|y| (0..4).map(move |x| [x as f32, y as f32, 0.0]))
+            .collect();
+        let mut f = Vec::new();
+        for x in 0..3u32 {
+            f.push([x, x + 1, x + 5]);
+            f.push([x, x + 5, x + 4]);
+        }
+        let mesh = TriMesh::new(v, f).unwrap();
+        let seeds = [0, 3, 4, 7];
+        let region = geodesic_voronoi_regions(&mesh, &seeds).unwrap();
+        // Vertex 1 is 1 from seed 0 and 2 from seed 1; vertex 2 the other way; the lower
+        // row likewise (vertex 5 via the diagonal to 0 costs √2 > 1 from 4).
+        assert_eq!(region, vec![0, 0, 1, 1, 2, 2, 3, 3]);
+        // The faces meeting three regions: [1, 2, 6] (0, 1, 3) and [1, 6, 5] (0, 3, 2).
+        assert_eq!(
+            voronoi_dual_triangles(&mesh, &seeds).unwrap(),
+            vec![[0, 1, 3], [0, 3, 2]]
+        );
+    }
+
+    #[test]
+    fn evenly_spread_seeds_on_a_sphere_give_a_closed_manifold() {
+        let fine = icosphere(4);
+        // The vertices of icosphere(2) are the first 162 of icosphere(4) (subdivision keeps
+        // the old vertices first).
+        let seeds: Vec<u32> = (0..162).collect();
+        let dual = voronoi_dual_triangles(&fine, &seeds).unwrap();
+        let corners: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
+        let mesh = TriMesh::new(corners, dual).unwrap();
+        assert!(is_edge_manifold(&mesh));
+        assert_eq!(mesh.face_count(), 320);
+        assert!(is_watertight(&mesh));
+    }
+
+    #[test]
+    fn bad_seeds_are_errors_and_unreached_vertices_have_no_region() {
+        let sphere = icosphere(1);
+        assert!(geodesic_voronoi_regions(&sphere, &[0, 0]).is_err());
+        assert!(geodesic_voronoi_regions(&sphere, &[42]).is_err());
+        let mut v = sphere.vertices().to_vec();
+        v.push([5.0, 0.0, 0.0]);
+        let lonely = TriMesh::new(v, sphere.triangles().to_vec()).unwrap();
+        let region = geodesic_voronoi_regions(&lonely, &[0]).unwrap();
+        assert_eq!(region[42], u32::MAX);
+        assert!(region[..42].iter().all(|&r| r == 0));
+    }
+}

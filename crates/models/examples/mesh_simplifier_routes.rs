@@ -1,0 +1,235 @@
+//! Routes for training the neural mesh simplifier (docs/mesh_simplifier_model.md, "Training"):
+//! how good the Voronoi-dual face targets are (their candidate recall, and the dual mesh itself
+//! against QEM at the same face count) for the thesis' multinomial draw, the balanced draw of
+//! the untrained sampler's probabilities and of the QEM importance, and FPS picks.
+//!
+//! `train EPOCHS` trains the model ([`SimplifierTraining`]) on the train families and reports
+//! the simplifications of the test families before and after; the best epoch's weights go to
+//! `mesh_simplifier.safetensors`, the resumable state to `mesh_simplifier.checkpoint`.
+//! `eval WEIGHTS RES...` reports trained weights on the test families at each resolution.
+//!
+//! ```text
+//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- [RES] [RATIO]
+//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- train EPOCHS [RES] [LR] [PER_FAMILY]
+//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- eval WEIGHTS RES...
+//! ```
+
+use candle_core::{DType, Device};
+use candle_nn::{VarBuilder, VarMap};
+use meshgnn_data::{ShapeFamily, shape_mesh};
+use meshgnn_geometry::{TriMesh, sample_surface, voronoi_dual_triangles};
+use meshgnn_graph::{
+    DecimationOptions, FpsStart, Target, balanced_sampling, decimate, fast_farthest_point_sampling,
+    weighted_sampling,
+};
+use meshgnn_losses::metrics::{chamfer_distance, watertightness};
+use meshgnn_models::mesh_simplifier::{
+    MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig, SimplifierExample,
+    SimplifierTraining, qem_importance,
+};
+use meshgnn_models::training::{TrainingConfig, train};
+use std::collections::HashSet;
+
+type AnyResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
+fn dual_mesh(mesh: &TriMesh, picks: &[u32]) -> AnyResult<TriMesh> {
+    let faces = voronoi_dual_triangles(mesh, picks)?;
+    let corners = picks.iter().map(|&i| mesh.vertices()[i as usize]).collect();
+    Ok(TriMesh::new(corners, faces)?)
+}
+
+/// Symmetric mean squared Chamfer distance between 20 000 surface samples of each.
+fn surface_chamfer(a: &TriMesh, b: &TriMesh) -> AnyResult<f64> {
+    let pa = sample_surface(a, 20_000, 1)?.points;
+    let pb = sample_surface(b, 20_000, 2)?.points;
+    Ok(chamfer_distance(&pa, &pb)?.symmetric_mean())
+}
+
+/// Simplifies each test mesh to a tenth of its vertices; prints raw and final WA and the
+/// Chamfer distance against QEM's at the same face count.
+fn report(
+    model: &NeuralMeshSimplifier,
+    test: &[(&str, TriMesh, f64)],
+    label: &str,
+) -> AnyResult<()> {
+    for (name, mesh, cd_qem) in test {
+        let started = std::time::Instant::now();
+        let out = model.simplify(mesh, mesh.vertex_count() / 10, 1)?;
+        let seconds = started.elapsed().as_secs_f64();
+        let cd = if out.mesh.face_count() == 0 {
+            f64::NAN
+        } else {
+            surface_chamfer(mesh, &out.mesh)?
+        };
+        println!(
+            "{label} {name} ({} faces): raw {} faces WA_raw {:.2} -> {} faces WA {:.2} CD/qem {:.2} ({seconds:.2} s)",
+            mesh.face_count(),
+            out.raw_faces,
+            out.wa_raw,
+            out.mesh.face_count(),
+            out.wa,
+            cd / cd_qem,
+        );
+    }
+    Ok(())
+}
+
+/// The test families' first shapes at `resolution`, with QEM's Chamfer distance at a tenth of
+/// the vertices.
+fn test_meshes(resolution: usize) -> AnyResult<Vec<(&'static str, TriMesh, f64)>> {
+    let mut test = Vec::new();
+    for family in ShapeFamily::ALL.iter().filter(|f| f.split() == "test") {
+        let mesh = shape_mesh(*family, 1, resolution)?;
+        let qem = decimate(
+            &mesh,
+            &DecimationOptions {
+                target: Target::Faces(2 * (mesh.vertex_count() / 10)),
+                ..Default::default()
+            },
+        )?;
+        let cd_qem = surface_chamfer(&mesh, &qem.mesh)?;
+        test.push((family.name(), mesh, cd_qem));
+    }
+    Ok(test)
+}
+
+/// `eval WEIGHTS [RES...]`: the report of trained weights on the test families.
+fn evaluate(args: &[String]) -> AnyResult<()> {
+    let weights = args.first().ok_or("give the weights file")?;
+    let model = NeuralMeshSimplifier::load(weights)?;
+    for resolution in args[1..].iter().map(|s| s.parse::<usize>()) {
+        report(&model, &test_meshes(resolution?)?, weights)?;
+    }
+    Ok(())
+}
+
+fn train_model(args: &[String]) -> AnyResult<()> {
+    let epochs: usize = args.first().map_or(Ok(10), |s| s.parse())?;
+    let resolution: usize = args.get(1).map_or(Ok(32), |s| s.parse())?;
+    let learning_rate: f64 = args.get(2).map_or(Ok(1e-3), |s| s.parse())?;
+    let per_family: u64 = args.get(3).map_or(Ok(6), |s| s.parse())?;
+    let mut train_set = Vec::new();
+    let mut validation = Vec::new();
+    for family in ShapeFamily::ALL.iter().filter(|f| f.split() == "train") {
+        for seed in 0..=per_family {
+            let example = SimplifierExample::new(shape_mesh(*family, 100 + seed, resolution)?)?;
+            if seed == per_family {
+                validation.push(example);
+            } else {
+                train_set.push(example);
+            }
+        }
+    }
+    let test = test_meshes(40)?;
+    let mut task = SimplifierTraining::new(
+        &NeuralMeshSimplifierConfig::default(),
+        train_set,
+        validation,
+        (0.05, 0.25),
+        0,
+    )?;
+    report(task.model(), &test, "epoch 0")?;
+    let config = TrainingConfig {
+        epochs,
+        batch_size: 1,
+        learning_rate,
+        lr_decay: 0.95,
+        checkpoint: Some("mesh_simplifier.checkpoint".into()),
+        best_weights: Some("mesh_simplifier.safetensors".into()),
+        ..Default::default()
+    };
+    let started = std::time::Instant::now();
+    train(&mut task, &config, &mut |p| {
+        if p.epoch_end {
+            println!(
+                "epoch {}: loss {:.4} recall {:.3} validation {:.4} ({:.0} s)",
+                p.epoch + 1,
+                p.loss,
+                p.figure.unwrap_or(f64::NAN),
+                p.validation.unwrap_or(f64::NAN),
+                started.elapsed().as_secs_f64()
+            );
+        }
+    })?;
+    report(task.model(), &test, &format!("epoch {epochs}"))?;
+    Ok(())
+}
+
+fn main() -> AnyResult<()> {
+    let args: Vec<String> = std::env::args().collect();
+    match args.get(1).map(String::as_str) {
+        Some("train") => return train_model(&args[2..]),
+        Some("eval") => return evaluate(&args[2..]),
+        _ => {}
+    }
+    let resolution: usize = args.get(1).map_or(Ok(40), |s| s.parse())?;
+    let ratio: f64 = args.get(2).map_or(Ok(0.1), |s| s.parse())?;
+    let map = VarMap::new();
+    let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
+    let mut config = NeuralMeshSimplifierConfig::default();
+    if let Some(k) = args.get(3) {
+        config.edges.candidate_neighbours = k.parse()?;
+    }
+    let model = NeuralMeshSimplifier::new(vb, &config)?;
+    meshgnn_models::spiral::seeded_initialization(&map, 0)?;
+    println!("shape\tfaces\tpicks\tdual_faces\trecall\tWA_dual\tCD_dual/CD_qem");
+    for family in ShapeFamily::ALL {
+        let mesh = shape_mesh(family, 1, resolution)?;
+        let m = ((mesh.vertex_count() as f64) * ratio).round() as usize;
+        let qem = decimate(
+            &mesh,
+            &DecimationOptions {
+                target: Target::Faces(2 * m),
+                ..Default::default()
+            },
+        )?;
+        let cd_qem = surface_chamfer(&mesh, &qem.mesh)?;
+        let input = MeshInput::new(&mesh, &Device::Cpu)?;
+        let pass = model.forward(&input, m, 3)?;
+        let fps = fast_farthest_point_sampling(mesh.vertices(), m, FpsStart::Index(0))?;
+        let probabilities: Vec<f32> = pass.sampled.probabilities.to_vec1()?;
+        let importance = qem_importance(&mesh)?;
+        let routes = [
+            ("multinomial", weighted_sampling(&probabilities, m, 3)?),
+            ("balanced", pass.sampled.indices.clone()),
+            (
+                "balanced-qem",
+                balanced_sampling(mesh.vertices(), &importance, m, 3)?,
+            ),
+            ("fps", fps),
+        ];
+        for (name, picks) in routes {
+            let dual = dual_mesh(&mesh, &picks)?;
+            let recall = if name == "balanced" {
+                let candidates: HashSet<[u32; 3]> =
+                    pass.candidates.triangles.iter().copied().collect();
+                let hit = dual
+                    .triangles()
+                    .iter()
+                    .filter(|t| {
+                        let mut k = **t;
+                        k.sort_unstable();
+                        candidates.contains(&k)
+                    })
+                    .count();
+                format!(
+                    "{:.3} of {}",
+                    hit as f64 / dual.face_count().max(1) as f64,
+                    pass.candidates.triangles.len()
+                )
+            } else {
+                "-".into()
+            };
+            let cd = surface_chamfer(&mesh, &dual)?;
+            println!(
+                "{}/{name}\t{}\t{m}\t{}\t{recall}\t{:.2}\t{:.2}",
+                family.name(),
+                mesh.face_count(),
+                dual.face_count(),
+                watertightness(&dual),
+                cd / cd_qem
+            );
+        }
+    }
+    Ok(())
+}
