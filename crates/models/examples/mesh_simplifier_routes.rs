@@ -24,11 +24,10 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
 use meshgnn_models::mesh_simplifier::{
-    MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig, SimplifierExample,
+    DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig, SimplifierExample,
     SimplifierTraining, qem_importance,
 };
 use meshgnn_models::training::{TrainingConfig, train};
-use std::collections::HashSet;
 
 type AnyResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
@@ -201,20 +200,10 @@ fn main() -> AnyResult<()> {
         for (name, picks) in routes {
             let dual = dual_mesh(&mesh, &picks)?;
             let recall = if name == "balanced" {
-                let candidates: HashSet<[u32; 3]> =
-                    pass.candidates.triangles.iter().copied().collect();
-                let hit = dual
-                    .triangles()
-                    .iter()
-                    .filter(|t| {
-                        let mut k = **t;
-                        k.sort_unstable();
-                        candidates.contains(&k)
-                    })
-                    .count();
+                let targets = DualTargets::new(&mesh, &pass)?;
                 format!(
                     "{:.3} of {}",
-                    hit as f64 / dual.face_count().max(1) as f64,
+                    targets.candidate_hits as f64 / targets.dual_faces.max(1) as f64,
                     pass.candidates.triangles.len()
                 )
             } else {

@@ -84,7 +84,7 @@ pub fn candidate_features(
     Ok(features)
 }
 
-/// Feature 4 of the module docs; 1 (empty) for a degenerate triangle's missing circle.
+/// Feature 4 of the module docs; −1 (crowded) for a degenerate triangle, which has no circle.
 fn circumsphere_emptiness(
     index: &SpatialIndex,
     [a, b, c]: [[f64; 3]; 3],
