@@ -36,6 +36,7 @@ mod duplicate_faces;
 mod edge_topology;
 mod face_normals;
 mod graph_laplacian;
+mod hole_filling;
 mod input_content;
 mod laplacian_eigenvectors;
 mod manifold;
@@ -85,6 +86,7 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
+pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes};
 pub use input_content::{
     InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points, read_input_mesh,
     read_input_point_cloud,

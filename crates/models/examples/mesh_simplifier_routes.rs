@@ -17,7 +17,9 @@
 use candle_core::{DType, Device};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_data::{ShapeFamily, shape_mesh};
-use meshgnn_geometry::{TriMesh, sample_surface, voronoi_dual_triangles};
+use meshgnn_geometry::{
+    TriMesh, boundary_loops, fill_holes, sample_surface, voronoi_dual_triangles,
+};
 use meshgnn_graph::{
     DecimationOptions, FpsStart, Target, balanced_sampling, decimate, fast_farthest_point_sampling,
     weighted_sampling,
@@ -44,8 +46,9 @@ fn surface_chamfer(a: &TriMesh, b: &TriMesh) -> AnyResult<f64> {
     Ok(chamfer_distance(&pa, &pb)?.symmetric_mean())
 }
 
-/// Simplifies each test mesh to a tenth of its vertices; prints raw and final WA and the
-/// Chamfer distance against QEM's at the same face count.
+/// Simplifies each test mesh to a tenth of its vertices; prints raw and final WA, the holes
+/// left, WA and holes after closing those of at most 30 edges, and the Chamfer distance
+/// against QEM's at the same face count.
 fn report(
     model: &NeuralMeshSimplifier,
     test: &[(&str, TriMesh, f64)],
@@ -53,20 +56,25 @@ fn report(
 ) -> AnyResult<()> {
     for (name, mesh, cd_qem) in test {
         let started = std::time::Instant::now();
-        let out = model.simplify(mesh, mesh.vertex_count() / 10, 1)?;
+        let out = model.simplify(mesh, mesh.vertex_count() / 10, 1, None)?;
         let seconds = started.elapsed().as_secs_f64();
+        let filled = fill_holes(&out.mesh, 30)?;
         let cd = if out.mesh.face_count() == 0 {
             f64::NAN
         } else {
             surface_chamfer(mesh, &out.mesh)?
         };
         println!(
-            "{label} {name} ({} faces): raw {} faces WA_raw {:.2} -> {} faces WA {:.2} CD/qem {:.2} ({seconds:.2} s)",
+            "{label} {name} ({} faces): raw {} faces WA_raw {:.2} -> {} faces WA {:.2} holes {} \
+             (filled: WA {:.2} holes {}) CD/qem {:.2} ({seconds:.2} s)",
             mesh.face_count(),
             out.raw_faces,
             out.wa_raw,
             out.mesh.face_count(),
             out.wa,
+            out.holes,
+            watertightness(&filled),
+            boundary_loops(&filled).len(),
             cd / cd_qem,
         );
     }

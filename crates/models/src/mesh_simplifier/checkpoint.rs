@@ -137,8 +137,8 @@ mod tests {
         assert_eq!(loaded.config(), model.config());
         let sphere = meshgnn_geometry::icosphere(2);
         let (a, b) = (
-            model.simplify(&sphere, 40, 1).unwrap(),
-            loaded.simplify(&sphere, 40, 1).unwrap(),
+            model.simplify(&sphere, 40, 1, None).unwrap(),
+            loaded.simplify(&sphere, 40, 1, None).unwrap(),
         );
         assert_eq!(a.mesh, b.mesh);
         let mut header = config.header();

@@ -2,8 +2,9 @@
 //! `M` vertices, the edge predictor connects them (`A_s`) and proposes candidate triangles, the
 //! face classifier scores each. [`NeuralMeshSimplifier::forward`] returns everything the
 //! eq. 6.14 loss needs; [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5`
-//! (ch. 6.4) and makes them edge-manifold and consistently oriented
-//! ([`meshgnn_geometry::select_manifold_faces`]).
+//! (ch. 6.4), makes them edge-manifold and consistently oriented
+//! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the small holes left
+//! ([`meshgnn_geometry::fill_holes`]).
 //!
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
@@ -13,7 +14,10 @@
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
-use meshgnn_geometry::{TriMesh, select_manifold_faces, unit_sphere_normalization, vertex_normals};
+use meshgnn_geometry::{
+    TriMesh, boundary_loops, fill_holes, select_manifold_faces, unit_sphere_normalization,
+    vertex_normals,
+};
 use meshgnn_graph::{CsrMatrix, vertex_adjacency};
 use meshgnn_losses::metrics::watertightness;
 
@@ -104,6 +108,8 @@ pub struct NeuralSimplification {
     pub wa_raw: f64,
     /// WA of the output.
     pub wa: f64,
+    /// Boundary loops (holes and rims) of the output.
+    pub holes: usize,
 }
 
 /// The three modules under `sampler`, `edges` and `faces`.
@@ -127,7 +133,7 @@ impl NeuralMeshSimplifier {
     /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
     /// let model = NeuralMeshSimplifier::new(vb, &NeuralMeshSimplifierConfig::default())?;
     /// let sphere = meshgnn_geometry::icosphere(3); // 642 vertices
-    /// let out = model.simplify(&sphere, 160, 1)?;
+    /// let out = model.simplify(&sphere, 160, 1, None)?;
     /// assert_eq!(out.mesh.vertex_count(), 160);
     /// assert!(meshgnn_geometry::is_edge_manifold(&out.mesh));
     /// # Ok::<(), meshgnn_models::Error>(())
@@ -195,12 +201,15 @@ impl NeuralMeshSimplifier {
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
-    /// then the manifold pass (module docs). Errors on a mesh without faces or a bad target.
+    /// then the manifold pass (module docs), then, with `fill_holes: Some(k)`, every hole of
+    /// at most `k` edges closed. Errors on a mesh without faces, a bad target or `k` above
+    /// [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`].
     pub fn simplify(
         &self,
         mesh: &TriMesh,
         target: usize,
         seed: u64,
+        fill_holes_up_to: Option<usize>,
     ) -> Result<NeuralSimplification> {
         let n = mesh.vertex_count();
         if !(3..=n).contains(&target) {
@@ -238,9 +247,13 @@ impl NeuralMeshSimplifier {
             FACE_THRESHOLD,
             Some(&normals),
         )?;
-        let mesh = TriMesh::new(vertices, faces)?;
+        let mut mesh = TriMesh::new(vertices, faces)?;
+        if let Some(max_edges) = fill_holes_up_to {
+            mesh = fill_holes(&mesh, max_edges)?;
+        }
         Ok(NeuralSimplification {
             wa: watertightness(&mesh),
+            holes: boundary_loops(&mesh).len(),
             mesh,
             vertex_map,
             raw_faces,
@@ -279,8 +292,8 @@ mod tests {
             .map(|p| [p[0] * 40.0 + 7.0, p[1] * 40.0, p[2] * 40.0 - 3.0])
             .collect();
         let mesh = TriMesh::new(big, sphere.triangles().to_vec()).unwrap();
-        let a = m.simplify(&mesh, 120, 4).unwrap();
-        let b = m.simplify(&mesh, 120, 4).unwrap();
+        let a = m.simplify(&mesh, 120, 4, None).unwrap();
+        let b = m.simplify(&mesh, 120, 4, None).unwrap();
         assert_eq!(a.mesh, b.mesh);
         assert_eq!(a.mesh.vertex_count(), 120);
         assert!(is_edge_manifold(&a.mesh));
@@ -300,9 +313,9 @@ mod tests {
     fn bad_targets_and_faceless_meshes_are_errors() {
         let m = model();
         let sphere = meshgnn_geometry::icosphere(1);
-        assert!(m.simplify(&sphere, 2, 0).is_err());
-        assert!(m.simplify(&sphere, 43, 0).is_err());
+        assert!(m.simplify(&sphere, 2, 0, None).is_err());
+        assert!(m.simplify(&sphere, 43, 0, None).is_err());
         let cloud = TriMesh::new(sphere.vertices().to_vec(), vec![]).unwrap();
-        assert!(m.simplify(&cloud, 10, 0).is_err());
+        assert!(m.simplify(&cloud, 10, 0, None).is_err());
     }
 }

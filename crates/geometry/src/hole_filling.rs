@@ -1,0 +1,244 @@
+//! Closes small holes: every boundary loop of at most `max_edges` edges is triangulated with
+//! the least total area (Barequet & Sharir's dynamic programme, the area weight of Liepa 2003,
+//! "Filling holes in meshes"), the way MeshLab's "Close Holes" filter bounds the hole size in
+//! edges. The neural mesh simplifier's `--fill-holes` runs it after its manifold pass.
+//!
+//! The new faces run every loop edge against its face, so an oriented mesh stays oriented; a
+//! diagonal that is already an edge of the mesh (or of a hole filled before) is never used, so
+//! an edge-manifold mesh stays edge-manifold. A loop that passes a vertex twice, a chain that
+//! does not close, or a loop with no triangulation under those rules is left open.
+
+use std::collections::HashSet;
+
+use crate::edge_topology::edge_topology;
+use crate::error::{Error, Result};
+use crate::vec3::{norm, triangle_cross};
+use crate::{TriMesh, boundary_loops::boundary_loops_in};
+
+/// The largest hole [`fill_holes`] accepts to close: the programme takes `O(k³)` time and
+/// `O(k²)` memory for a loop of `k` edges.
+pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
+
+/// `mesh` with every boundary loop of 3 to `max_edges` edges closed (module docs); the
+/// vertices are kept, the new faces follow the old ones. Errors when `max_edges` exceeds
+/// [`MAX_FILLED_HOLE_EDGES`].
+///
+/// ```
+/// use meshgnn_geometry::{boundary_loops, fill_holes, icosphere, TriMesh};
+/// let sphere = icosphere(2);
+/// let mut faces = sphere.triangles().to_vec();
+/// faces.truncate(faces.len() - 3); // three faces off: one hole
+/// let open = TriMesh::new(sphere.vertices().to_vec(), faces)?;
+/// assert_eq!(boundary_loops(&open).len(), 1);
+/// let closed = fill_holes(&open, 30)?;
+/// assert!(boundary_loops(&closed).is_empty());
+/// assert!(meshgnn_geometry::is_watertight(&closed));
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
+    if max_edges > MAX_FILLED_HOLE_EDGES {
+        return Err(Error::InvalidParameter {
+            name: "max_edges",
+            message: format!(
+                "{max_edges} is more than the {MAX_FILLED_HOLE_EDGES} boundary edges a hole \
+                 may have to be filled"
+            ),
+        });
+    }
+    let topology = edge_topology(mesh);
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut edges: HashSet<(u32, u32)> = topology.edges().iter().map(|&[a, b]| key(a, b)).collect();
+    let boundary: HashSet<(u32, u32)> = (0..topology.edge_count())
+        .filter(|&e| topology.valence(e) == 1)
+        .map(|e| {
+            let [a, b] = topology.edges()[e];
+            key(a, b)
+        })
+        .collect();
+    let mut faces = mesh.triangles().to_vec();
+    for hole in boundary_loops_in(&topology) {
+        let k = hole.len();
+        let distinct: HashSet<u32> = hole.iter().copied().collect();
+        let closes = (0..k).all(|i| boundary.contains(&key(hole[i], hole[(i + 1) % k])));
+        if !(3..=max_edges).contains(&k) || distinct.len() != k || !closes {
+            continue;
+        }
+        if let Some(patch) = least_area_triangulation(mesh.vertices(), &hole, &edges) {
+            for &[a, b, c] in &patch {
+                edges.extend([key(a, b), key(b, c), key(c, a)]);
+            }
+            faces.extend(patch);
+        }
+    }
+    TriMesh::new(mesh.vertices().to_vec(), faces)
+}
+
+/// The triangulation of the closed polygon `hole` with the least total area whose diagonals
+/// are not in `edges`, each triangle running the polygon backwards; `None` when every
+/// triangulation needs an existing edge.
+fn least_area_triangulation(
+    vertices: &[[f32; 3]],
+    hole: &[u32],
+    edges: &HashSet<(u32, u32)>,
+) -> Option<Vec<[u32; 3]>> {
+    let k = hole.len();
+    let corner = |i: usize| vertices[hole[i] as usize];
+    let usable = |i: usize, j: usize| {
+        // Polygon sides (consecutive, or the closing pair) are the hole's own edges.
+        let (a, b) = (hole[i], hole[j]);
+        j == i + 1 || (i == 0 && j == k - 1) || !edges.contains(&(a.min(b), a.max(b)))
+    };
+    // cost[i][j]: least area of the polygon i, i+1, …, j closed by the chord (i, j);
+    // split[i][j]: the apex m of the triangle on that chord.
+    let mut cost = vec![f64::INFINITY; k * k];
+    let mut split = vec![0usize; k * k];
+    for i in 0..k - 1 {
+        cost[i * k + i + 1] = 0.0;
+    }
+    for span in 2..k {
+        for i in 0..k - span {
+            let j = i + span;
+            if !usable(i, j) {
+                continue;
+            }
+            for m in i + 1..j {
+                let area = 0.5 * norm(triangle_cross([corner(i), corner(m), corner(j)]));
+                let total = cost[i * k + m] + cost[m * k + j] + area;
+                if total < cost[i * k + j] {
+                    cost[i * k + j] = total;
+                    split[i * k + j] = m;
+                }
+            }
+        }
+    }
+    if !cost[k - 1].is_finite() {
+        return None;
+    }
+    let mut triangles = Vec::with_capacity(k - 2);
+    let mut stack = vec![(0, k - 1)];
+    while let Some((i, j)) = stack.pop() {
+        if j < i + 2 {
+            continue;
+        }
+        let m = split[i * k + j];
+        triangles.push([hole[j], hole[m], hole[i]]);
+        stack.extend([(i, m), (m, j)]);
+    }
+    Some(triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{boundary_loops, grid_plane, icosphere, is_edge_manifold, is_watertight};
+
+    /// `mesh` without the faces `drop`.
+    fn without(mesh: &TriMesh, drop: &[usize]) -> TriMesh {
+        let faces = (0..mesh.face_count())
+            .filter(|f| !drop.contains(f))
+            .map(|f| mesh.triangles()[f])
+            .collect();
+        TriMesh::new(mesh.vertices().to_vec(), faces).unwrap()
+    }
+
+    fn area(mesh: &TriMesh, from: usize) -> f64 {
+        (from..mesh.face_count())
+            .map(|f| 0.5 * norm(triangle_cross(mesh.triangle_positions(f))))
+            .sum()
+    }
+
+    #[test]
+    fn a_square_hole_gets_two_triangles_of_its_area_oriented_like_the_rest() {
+        // 3×3 grid of unit squares; the two faces of the centre square removed.
+        let grid = grid_plane(3, 3);
+        let centre: Vec<usize> = (0..grid.face_count())
+            .filter(|&f| {
+                let c = grid.triangle_positions(f);
+                let x = (c[0][0] + c[1][0] + c[2][0]) / 3.0;
+                let y = (c[0][1] + c[1][1] + c[2][1]) / 3.0;
+                let (lo, hi) = (grid.vertices()[5][0], grid.vertices()[10][0]);
+                x > lo && x < hi && y > grid.vertices()[5][1] && y < grid.vertices()[10][1]
+            })
+            .collect();
+        assert_eq!(centre.len(), 2);
+        let open = without(&grid, &centre);
+        assert_eq!(boundary_loops(&open).len(), 2);
+        let closed = fill_holes(&open, 4).unwrap();
+        assert_eq!(closed.face_count(), grid.face_count());
+        // The outer rim (12 edges) is longer than 4 and stays; the hole is gone.
+        assert_eq!(boundary_loops(&closed).len(), 1);
+        let side = f64::from(grid.vertices()[1][0] - grid.vertices()[0][0]);
+        assert!((area(&closed, open.face_count()) - side * side).abs() < 1e-6);
+        // Same winding as the grid: every new face's normal points like the old ones.
+        let up = triangle_cross(grid.triangle_positions(0))[2].signum();
+        for f in open.face_count()..closed.face_count() {
+            assert_eq!(triangle_cross(closed.triangle_positions(f))[2].signum(), up);
+        }
+        assert!(is_edge_manifold(&closed));
+    }
+
+    #[test]
+    fn the_least_area_triangulation_of_a_folded_quad_takes_the_short_diagonal() {
+        // A quad folded along (1, 3): the diagonal (0, 2) spans the fold, giving more area.
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let (a1, a2) = (
+            0.5 * norm(triangle_cross([v[0], v[1], v[3]]))
+                + 0.5 * norm(triangle_cross([v[1], v[2], v[3]])),
+            0.5 * norm(triangle_cross([v[0], v[1], v[2]]))
+                + 0.5 * norm(triangle_cross([v[0], v[2], v[3]])),
+        );
+        assert!(a1 < a2);
+        let fill = least_area_triangulation(&v, &[0, 1, 2, 3], &HashSet::new()).unwrap();
+        let diagonal_13 = fill.iter().all(|t| t.contains(&1) && t.contains(&3));
+        assert!(diagonal_13, "{fill:?}");
+        // With (1, 3) already an edge, the other diagonal is the only choice.
+        let fill = least_area_triangulation(&v, &[0, 1, 2, 3], &HashSet::from([(1, 3)])).unwrap();
+        assert!(fill.iter().all(|t| t.contains(&0) && t.contains(&2)));
+        // With both, no triangulation exists.
+        let both = HashSet::from([(1, 3), (0, 2)]);
+        assert!(least_area_triangulation(&v, &[0, 1, 2, 3], &both).is_none());
+    }
+
+    #[test]
+    fn holes_in_a_sphere_close_into_a_watertight_mesh_and_long_ones_stay_open() {
+        let sphere = icosphere(3);
+        // Faces around vertex 0 and around a far vertex: two separate holes.
+        let around = |v: u32| -> Vec<usize> {
+            (0..sphere.face_count())
+                .filter(|&f| sphere.triangles()[f].contains(&v))
+                .collect()
+        };
+        let far = (0..sphere.vertex_count() as u32)
+            .max_by(|&a, &b| {
+                let d = |v: u32| {
+                    crate::vec3::squared_distance_f64(
+                        &sphere.vertices()[0],
+                        &sphere.vertices()[v as usize],
+                    )
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        let mut drop = around(0);
+        drop.extend(around(far));
+        let open = without(&sphere, &drop);
+        assert_eq!(boundary_loops(&open).len(), 2);
+        let closed = fill_holes(&open, 30).unwrap();
+        assert!(is_watertight(&closed));
+        assert!(is_edge_manifold(&closed));
+        let kept = fill_holes(&open, 4).unwrap();
+        assert_eq!(kept, open);
+    }
+
+    #[test]
+    fn too_large_a_bound_is_an_error_and_a_closed_mesh_is_unchanged() {
+        let sphere = icosphere(1);
+        assert!(fill_holes(&sphere, MAX_FILLED_HOLE_EDGES + 1).is_err());
+        assert_eq!(fill_holes(&sphere, 30).unwrap(), sphere);
+    }
+}
