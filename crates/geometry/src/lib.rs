@@ -28,6 +28,7 @@ mod bounding_box;
 mod connected_components;
 mod cotangent_laplacian;
 mod count_bounds;
+mod crack_closing;
 mod curvature_at_scale;
 mod curvature_features;
 mod curvature_neighbourhoods;
@@ -72,6 +73,7 @@ pub use bounding_box::{bounding_box, bounding_box_diagonal};
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use cotangent_laplacian::cotangent_laplacian;
 pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};
+pub use crack_closing::close_cracks;
 pub use curvature_at_scale::{
     CurvatureAtScale, MAX_SCALE_NEIGHBOURS, VOID_NEIGHBOURS, curvature_at_scale,
     kernel_neighbourhood,

@@ -17,9 +17,7 @@
 use candle_core::{DType, Device};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_data::{ShapeFamily, shape_mesh};
-use meshgnn_geometry::{
-    TriMesh, boundary_loops, fill_holes, sample_surface, voronoi_dual_triangles,
-};
+use meshgnn_geometry::{TriMesh, boundary_loops, sample_surface, voronoi_dual_triangles};
 use meshgnn_graph::{
     DecimationOptions, FpsStart, Target, balanced_sampling, decimate, fast_farthest_point_sampling,
     weighted_sampling,
@@ -58,7 +56,9 @@ fn report(
         let started = std::time::Instant::now();
         let out = model.simplify(mesh, mesh.vertex_count() / 10, 1, None)?;
         let seconds = started.elapsed().as_secs_f64();
-        let filled = fill_holes(&out.mesh, 30)?;
+        let filled = model
+            .simplify(mesh, mesh.vertex_count() / 10, 1, Some(30))?
+            .mesh;
         let cd = if out.mesh.face_count() == 0 {
             f64::NAN
         } else {

@@ -3,8 +3,9 @@
 //! face classifier scores each. [`NeuralMeshSimplifier::forward`] returns everything the
 //! eq. 6.14 loss needs; [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5`
 //! (ch. 6.4), makes them edge-manifold and consistently oriented
-//! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the small holes left
-//! ([`meshgnn_geometry::fill_holes`]).
+//! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the holes left: first
+//! the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then every
+//! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]).
 //!
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
@@ -15,8 +16,8 @@
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_geometry::{
-    TriMesh, boundary_loops, fill_holes, select_manifold_faces, unit_sphere_normalization,
-    vertex_normals,
+    TriMesh, boundary_loops, close_cracks, fill_holes, select_manifold_faces,
+    unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{CsrMatrix, vertex_adjacency};
 use meshgnn_losses::metrics::watertightness;
@@ -201,8 +202,8 @@ impl NeuralMeshSimplifier {
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
-    /// then the manifold pass (module docs), then, with `fill_holes: Some(k)`, every hole of
-    /// at most `k` edges closed. Errors on a mesh without faces, a bad target or `k` above
+    /// then the manifold pass (module docs), then, with `fill_holes_up_to: Some(k)`, the
+    /// cracks closed with rejected candidates and every hole of at most `k` edges filled. Errors on a mesh without faces, a bad target or `k` above
     /// [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`].
     pub fn simplify(
         &self,
@@ -247,10 +248,13 @@ impl NeuralMeshSimplifier {
             FACE_THRESHOLD,
             Some(&normals),
         )?;
-        let mut mesh = TriMesh::new(vertices, faces)?;
-        if let Some(max_edges) = fill_holes_up_to {
-            mesh = fill_holes(&mesh, max_edges)?;
-        }
+        let mesh = match fill_holes_up_to {
+            None => TriMesh::new(vertices, faces)?,
+            Some(max_edges) => {
+                let closed = close_cracks(&faces, &pass.candidates.triangles, &probabilities)?;
+                fill_holes(&TriMesh::new(vertices, closed)?, max_edges)?
+            }
+        };
         Ok(NeuralSimplification {
             wa: watertightness(&mesh),
             holes: boundary_loops(&mesh).len(),
