@@ -159,6 +159,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
         let view = View {
             yaw: -20.0,
             pitch: 0.0,
+            wireframe: false,
         };
         write_png(p, &contact_sheet(&picks, 4, 256, view)?)?;
     }

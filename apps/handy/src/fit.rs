@@ -109,7 +109,11 @@ pub fn run(args: &FitArgs) -> Result<()> {
     write_mesh(&args.output, &mesh)
         .with_context(|| format!("writing {}", args.output.display()))?;
     if let Some(p) = &args.preview {
-        let views = [(0.0, 0.0), (90.0, 0.0), (0.0, 90.0)].map(|(yaw, pitch)| View { yaw, pitch });
+        let views = [(0.0, 0.0), (90.0, 0.0), (0.0, 90.0)].map(|(yaw, pitch)| View {
+            yaw,
+            pitch,
+            wireframe: false,
+        });
         write_png(
             p,
             &points_on_mesh_sheet(&mesh, scan.points(), &views, PREVIEW_TILE)?,

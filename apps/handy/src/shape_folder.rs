@@ -51,6 +51,7 @@ pub fn write_shape_folder(
     let view = View {
         yaw: 0.0,
         pitch: -35.0,
+        wireframe: false,
     };
     write_png(&sheet, &contact_sheet(&meshes, columns, 256, view)?)?;
     Ok(ShapeFolder {

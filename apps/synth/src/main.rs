@@ -225,6 +225,7 @@ fn hands(
         View {
             yaw: 155.0,
             pitch: -30.0,
+            wireframe: false,
         },
     )
 }
@@ -373,6 +374,7 @@ fn faces(
         View {
             yaw: -15.0,
             pitch: 5.0,
+            wireframe: false,
         },
     )
 }

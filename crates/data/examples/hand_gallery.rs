@@ -38,7 +38,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             template.triangles().to_vec(),
         )?);
     }
-    let view = View { yaw, pitch: -35.0 };
+    let view = View {
+        yaw,
+        pitch: -35.0,
+        wireframe: false,
+    };
     write_png(&out, &contact_sheet(&meshes, 4, 256, view)?)?;
     println!("{} vertices, wrote {out}", template.vertex_count());
     Ok(())

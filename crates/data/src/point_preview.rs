@@ -118,7 +118,7 @@ impl Layer {
 /// let colors = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
 /// let all = ColoredPoints { points: &points, colors: &colors };
 /// let first = ColoredPoints { points: &points[..1], colors: &colors[..1] };
-/// let sheet = point_cloud_sheet(&[all, first], 32, View { yaw: 0.0, pitch: 0.0 })?;
+/// let sheet = point_cloud_sheet(&[all, first], 32, View { yaw: 0.0, pitch: 0.0, wireframe: false })?;
 /// assert_eq!((sheet.width, sheet.height), (64, 32));
 /// # Ok::<(), meshgnn_data::Error>(())
 /// ```
@@ -165,7 +165,7 @@ const OVERLAY_MESH: [f64; 3] = [0.75, 0.82, 0.92];
 /// ```
 /// use meshgnn_data::{View, points_on_mesh_sheet};
 /// let sphere = meshgnn_geometry::icosphere(2);
-/// let views = [View { yaw: 0.0, pitch: 0.0 }, View { yaw: 90.0, pitch: 0.0 }];
+/// let views = [View { yaw: 0.0, pitch: 0.0, wireframe: false }, View { yaw: 90.0, pitch: 0.0, wireframe: false }];
 /// let sheet = points_on_mesh_sheet(&sphere, sphere.vertices(), &views, 64)?;
 /// assert_eq!((sheet.width, sheet.height), (128, 64));
 /// # Ok::<(), meshgnn_data::Error>(())
@@ -199,7 +199,7 @@ pub fn points_on_mesh_sheet(
         .map(|&view| {
             let projection = Projection::fitted(&both, tile, view);
             let mut layer = Layer::new(tile);
-            layer.draw_mesh(mesh, &projection, OVERLAY_MESH);
+            layer.draw_mesh(mesh, &projection, OVERLAY_MESH, view.wireframe);
             let cloud = ColoredPoints {
                 points,
                 colors: &colors,
@@ -219,6 +219,7 @@ mod tests {
     const FRONT: View = View {
         yaw: 0.0,
         pitch: 0.0,
+        wireframe: false,
     };
 
     fn pixel(img: &RgbImage, x: usize, y: usize) -> [u8; 3] {

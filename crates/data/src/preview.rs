@@ -28,14 +28,22 @@ pub struct RgbImage {
     pub pixels: Vec<u8>,
 }
 
-/// Camera orientation for [`render_mesh`], in degrees.
+/// How [`render_mesh`] draws: the camera orientation, in degrees, and whether the triangle
+/// edges show.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct View {
     /// Rotation about +y applied first.
     pub yaw: f64,
     /// Rotation about +x applied second.
     pub pitch: f64,
+    /// Darken the pixels within [`WIREFRAME_PIXELS`] of a visible triangle's edge, when the
+    /// mesh's median triangle is at least three line widths high on screen (a denser mesh
+    /// stays shaded instead of turning black).
+    pub wireframe: bool,
 }
+
+/// Half-width of a wireframe line, pixels.
+pub const WIREFRAME_PIXELS: f64 = 1.0;
 
 impl Default for View {
     /// A three-quarter view from the front-right, slightly above.
@@ -43,6 +51,7 @@ impl Default for View {
         Self {
             yaw: -25.0,
             pitch: 15.0,
+            wireframe: false,
         }
     }
 }
@@ -114,9 +123,34 @@ impl Projection {
     }
 }
 
+/// The median over `mesh`'s triangles of their smallest on-screen height (pixels; 0 for a
+/// mesh without faces).
+fn median_height(mesh: &TriMesh, screen: &[V3]) -> f64 {
+    let mut heights: Vec<f64> = mesh
+        .triangles()
+        .iter()
+        .filter_map(|t| {
+            let [a, b, c] = t.map(|v| screen.get(v as usize));
+            let (a, b, c) = (a?, b?, c?);
+            let twice_area = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
+            let longest = [(a, b), (b, c), (c, a)]
+                .iter()
+                .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+                .fold(1e-12, f64::max);
+            Some(twice_area / longest)
+        })
+        .collect();
+    if heights.is_empty() {
+        return 0.0;
+    }
+    let middle = heights.len() / 2;
+    *heights.select_nth_unstable_by(middle, f64::total_cmp).1
+}
+
 /// Renders `mesh` into a `size × size` tile: orthographic, fitted with a 6 % margin,
 /// two-sided Lambert shading of interpolated vertex normals under a light from the viewer's
-/// upper left, mixed with 25 % ambient, tinted by `color` (RGB in `[0, 1]`).
+/// upper left, mixed with 25 % ambient, tinted by `color` (RGB in `[0, 1]`); with
+/// `view.wireframe`, edges drawn dark over the shading.
 ///
 /// ```
 /// use meshgnn_data::{View, render_mesh};
@@ -136,7 +170,7 @@ pub fn render_mesh(mesh: &TriMesh, size: u32, view: View, color: [f64; 3]) -> Re
     }
     let projection = Projection::fitted(mesh.vertices(), size, view);
     let mut layer = Layer::new(size);
-    layer.draw_mesh(mesh, &projection, color);
+    layer.draw_mesh(mesh, &projection, color, view.wireframe);
     Ok(layer.into_image())
 }
 
@@ -166,7 +200,13 @@ impl Layer {
     /// Draws `mesh` through `projection` (z-buffered, two-sided Lambert shading of
     /// interpolated vertex normals, light from the viewer's upper left, 25 % ambient, tinted
     /// by `color`).
-    pub(crate) fn draw_mesh(&mut self, mesh: &TriMesh, projection: &Projection, color: [f64; 3]) {
+    pub(crate) fn draw_mesh(
+        &mut self,
+        mesh: &TriMesh,
+        projection: &Projection,
+        color: [f64; 3],
+        wireframe: bool,
+    ) {
         let screen: Vec<V3> = mesh
             .vertices()
             .par_iter()
@@ -178,6 +218,7 @@ impl Layer {
             .collect();
         let n = self.side();
         let light = normalize([-0.4, 0.5, 0.77]);
+        let wireframe = wireframe && median_height(mesh, &screen) >= 3.0 * WIREFRAME_PIXELS;
         for tri in mesh.triangles() {
             let [a, b, c] = tri.map(|v| v as usize);
             let (Some(pa), Some(pb), Some(pc)) = (screen.get(a), screen.get(b), screen.get(c))
@@ -193,6 +234,14 @@ impl Layer {
             let y0 = pa[1].min(pb[1]).min(pc[1]).floor().max(0.0) as usize;
             let y1 = (pa[1].max(pb[1]).max(pc[1]).ceil() as usize).min(n.saturating_sub(1));
             let (na, nb, nc) = (normals[a], normals[b], normals[c]);
+            // Pixel heights of the triangle over each edge: a corner's weight times the height
+            // over the opposite edge is the distance to that edge.
+            let length = |p: &V3, q: &V3| (p[0] - q[0]).hypot(p[1] - q[1]).max(1e-12);
+            let heights = [
+                area.abs() / length(pb, pc),
+                area.abs() / length(pc, pa),
+                area.abs() / length(pa, pb),
+            ];
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let (qx, qy) = (x as f64 + 0.5, y as f64 + 0.5);
@@ -212,6 +261,12 @@ impl Layer {
                             w0 * na[2] + w1 * nb[2] + w2 * nc[2],
                         ]);
                         let lum = 0.25 + 0.75 * dot(nrm, light).abs();
+                        let on_edge = wireframe
+                            && [w0, w1, w2]
+                                .iter()
+                                .zip(&heights)
+                                .any(|(w, h)| w * h < WIREFRAME_PIXELS);
+                        let lum = if on_edge { 0.3 * lum } else { lum };
                         self.color[i] = Some(color.map(|c| lum * c));
                     }
                 }
@@ -349,4 +404,76 @@ pub fn write_png(path: impl AsRef<Path>, image: &RgbImage) -> Result<()> {
         message,
     })?;
     Ok(atomic_write(path, &bytes)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::grid_plane;
+
+    /// Distance of `q` from the segment `a`–`b` (2D).
+    fn segment_distance(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (q[0] - a[0] - t * dx).hypot(q[1] - a[1] - t * dy)
+    }
+
+    #[test]
+    fn the_wireframe_darkens_exactly_the_pixels_along_the_edges() {
+        let square = grid_plane(1, 1); // two triangles sharing a diagonal
+        let front = View {
+            yaw: 0.0,
+            pitch: 0.0,
+            wireframe: false,
+        };
+        let size = 64;
+        let plain = render_mesh(&square, size, front, [1.0; 3]).unwrap();
+        let wired = render_mesh(
+            &square,
+            size,
+            View {
+                wireframe: true,
+                ..front
+            },
+            [1.0; 3],
+        )
+        .unwrap();
+        let projection = Projection::fitted(square.vertices(), size, front);
+        let screen: Vec<[f64; 2]> = square
+            .vertices()
+            .iter()
+            .map(|&p| {
+                let s = projection.to_screen(p);
+                [s[0], s[1]]
+            })
+            .collect();
+        let mut darkened = 0;
+        for y in 0..size as usize {
+            for x in 0..size as usize {
+                let i = (y * size as usize + x) * 3;
+                if wired.pixels[i] == plain.pixels[i] {
+                    continue;
+                }
+                assert!(wired.pixels[i] < plain.pixels[i]);
+                darkened += 1;
+                let q = [x as f64 + 0.5, y as f64 + 0.5];
+                let nearest = square
+                    .triangles()
+                    .iter()
+                    .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+                    .map(|(a, b)| segment_distance(q, screen[a as usize], screen[b as usize]))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest < WIREFRAME_PIXELS + 1e-9,
+                    "({x}, {y}) is {nearest} px away"
+                );
+            }
+        }
+        // The square's side spans 0.88 of the tile: four sides and a diagonal of lines.
+        let side = 0.88 * f64::from(size);
+        assert!(
+            f64::from(darkened) > 4.0 * side,
+            "{darkened} pixels darkened"
+        );
+    }
 }
