@@ -1,13 +1,13 @@
 //! `point_simplify`: the point-cloud simplifiers of `pcsimplify simplify`
-//! (`meshgnn_models::point_selection`: the learned simplifier of thesis ch. 5.3 with its
-//! bundled weights, and the FPS, random, TCP and QEM baselines).
+//! (`meshgnn_models::point_selection`: the learned simplifier of thesis ch. 5.3 and the point
+//! sampler of ch. 6 with their bundled weights, and the FPS, random, TCP and QEM baselines).
 
 use std::path::{Path, PathBuf};
 
 use meshgnn_geometry::{TriMesh, check_input_points};
-use meshgnn_models::point_selection::{self, SelectionInput, SelectionMethod, target_count};
-use meshgnn_models::point_simplifier::{POINT_SIMPLIFIER_NAME, PointSimplifier};
-use meshgnn_models::pretrained;
+use meshgnn_models::point_selection::{
+    self, SelectionInput, SelectionMethod, SelectionModel, target_count,
+};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -18,8 +18,8 @@ use crate::errors::{geometry_error, value_error};
 /// `point_simplify(X, *, ratio=None, points=None, method="neural", seed=0, faces_of=None,
 /// weights=None) -> (indices int64 (k,), kept float32 (k, 3))`: keeps `round(ratio·n)` or
 /// `points` of the rows of `X`. `faces_of`: the faces when `X` are a mesh's vertices (QEM
-/// needs them; the neural method then uses the mesh adjacency). `weights`: a simplifier
-/// checkpoint instead of the bundled one. `kept` are the kept points, moved by the neural
+/// needs them; the neural method and the sampler then use the mesh adjacency). `weights`: a
+/// checkpoint of the learned method instead of the bundled one. `kept` are the kept points, moved by the neural
 /// method's refinement (eq. 5.5), else `X[indices]`.
 #[pyfunction]
 #[pyo3(signature = (x, /, *, ratio=None, points=None, method="neural", seed=0, faces_of=None, weights=None))]
@@ -51,11 +51,7 @@ pub fn point_simplify<'py>(
         target_count(cloud.len(), ratio, points).map_err(|e| value_error("point_simplify", e))?;
     let selection = py
         .detach(|| {
-            let model = match (method, &weights) {
-                (SelectionMethod::Neural, Some(path)) => Some(PointSimplifier::load(path)?),
-                (SelectionMethod::Neural, None) => Some(pretrained::load(POINT_SIMPLIFIER_NAME)?),
-                _ => None,
-            };
+            let model = SelectionModel::for_method(method, weights.as_deref())?;
             let input = SelectionInput {
                 points: cloud,
                 normals: None,

@@ -33,8 +33,9 @@ pub fn simplify<'py>(
         "qem" => {}
         "neural" => {
             return Err(PyValueError::new_err(
-                "method=\"neural\": the neural mesh simplifier (thesis ch. 6) has no trained \
-                 weights yet; use method=\"qem\"",
+                "method=\"neural\": the neural mesh simplifier (thesis ch. 6) is not bound to \
+                 Python yet (it runs as `meshsimplify simplify --method neural`); use \
+                 method=\"qem\"",
             ));
         }
         other => {

@@ -7,8 +7,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod bench;
 mod eval;
 mod info;
+mod method;
 mod simplify;
 
 /// Inspect, simplify and evaluate triangle meshes (OBJ, PLY, OFF, glTF/GLB).
@@ -23,10 +25,13 @@ struct Cli {
 enum Command {
     /// Counts, bounding box, manifold/watertight status, boundaries, components, load time.
     Info(info::InfoArgs),
-    /// Simplify a mesh to a ratio or a face count (QEM edge collapse).
+    /// Simplify a mesh to a ratio or a face count (QEM edge collapse, the neural mesh
+    /// simplifier, or the point-cloud simplifier and re-meshing).
     Simplify(simplify::SimplifyArgs),
     /// Compare a simplified mesh with its original: CD, Hausdorff, NE, WA, LE, holes, manifold.
     Eval(eval::EvalArgs),
+    /// Every method at every ratio on a folder of meshes, in the layout of thesis Table 6.1.
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +44,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(args),
         Command::Simplify(args) => simplify::run(args),
         Command::Eval(args) => eval::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,36 +1,46 @@
-//! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem] [--max-error E]
-//! [--seed S] [--force] [--json]`: simplify a mesh file to a target size, or every mesh file
-//! of a folder IN into the folder OUT (same names; files in parallel; a failed file never
-//! stops the others, and the exit code says whether any failed).
+//! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem|neural|pc+remesh]
+//! [--max-error E] [--weights FILE] [--fill-holes [K]] [--seed S] [--preview PNG [--wireframe]]
+//! [--force] [--json]`: simplify a mesh file to a target size, or every mesh file of a folder
+//! IN into the folder OUT (same names; files in parallel; a failed file never stops the
+//! others, and the exit code says whether any failed).
 //!
 //! Any format the geometry crate reads and writes (OBJ, PLY, OFF, glTF/GLB; the output format
 //! follows OUT's extension, written atomically). Every argument is checked before anything is
-//! written: a ratio outside (0, 1], an unknown method, an unreadable input, an unsupported
-//! output extension, or OUT naming IN without `--force` exit non-zero with a message.
+//! written: a ratio outside (0, 1], an option the method does not take, an unreadable input or
+//! weights file, an unsupported output extension, or OUT naming IN without `--force` exit
+//! non-zero with a message.
+//!
+//! The methods are in [`crate::method`]: `neural` is the neural mesh simplifier of thesis
+//! ch. 6 and `pc+remesh` the ch. 5 route (the bundled weights of each, or `--weights FILE`
+//! from a training run); both select vertices, so the target becomes a vertex count.
+//! `--fill-holes [K]` closes the holes of at most `K` edges (default 30) after the neural
+//! method's manifold pass.
+//!
+//! `--preview PNG` (one file only) renders the input and the result side by side, shaded, with
+//! the project's own rasteriser (`meshgnn_data::contact_sheet`), `--wireframe` drawing edges.
 //!
 //! `--json` prints one object with the keys `input_faces`, `output_faces`, `error`,
 //! `seconds`, `stop_reason` (`error` is the largest collapse error as a distance in the input's
-//! units, see `meshgnn_graph::Decimation::error_distance`); for a folder, one such line per
-//! file with `input` and `output` added, or `{"input", "failure"}` for a file that failed.
+//! units, see `meshgnn_graph::Decimation::error_distance`, and `null` for the selecting
+//! methods); `neural` adds `wa_raw` and `wa` (percent of edges without exactly two faces,
+//! before and after the manifold pass and hole filling) and `holes` (boundary loops of the
+//! output). For a folder, one such line per file with `input` and `output` added, or
+//! `{"input", "failure"}` for a file that failed.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use meshgnn_data::{View, contact_sheet, write_png};
 use meshgnn_geometry::{
     InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, write_mesh,
 };
-use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
+use meshgnn_graph::Target;
 use rayon::prelude::*;
-use serde_json::{Value, json};
+use serde_json::json;
 
-/// Simplification methods.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// Quadric error metric edge collapse (Garland & Heckbert 1997).
-    Qem,
-}
+use crate::method::{Method, MethodOptions, Outcome, Simplifier};
 
 /// Arguments of `meshsimplify simplify`.
 #[derive(clap::Args, Debug)]
@@ -50,12 +60,25 @@ pub struct SimplifyArgs {
     /// The simplification method.
     #[arg(long, value_enum, default_value_t = Method::Qem)]
     pub method: Method,
-    /// Stop before any collapse whose error exceeds this distance (input units).
+    /// Stop before any collapse whose error exceeds this distance (input units; qem only).
     #[arg(long)]
     pub max_error: Option<f64>,
-    /// Seed for randomised methods (QEM is deterministic and does not use it).
+    /// Weights of the neural or point-cloud simplifier (a file its training wrote); the
+    /// bundled ones when omitted (neural and pc+remesh only).
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Close the holes of at most K boundary edges left after the manifold pass (neural only).
+    #[arg(long, value_name = "K", num_args = 0..=1, default_missing_value = "30")]
+    pub fill_holes: Option<usize>,
+    /// Seed for the selecting methods' random draws (QEM is deterministic).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also write a PNG of the input and the result side by side (one file only).
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
+    /// Draw the edges on the preview.
+    #[arg(long, requires = "preview")]
+    pub wireframe: bool,
     /// Allow the output to overwrite the input.
     #[arg(long)]
     pub force: bool,
@@ -77,20 +100,42 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     {
         bail!("--max-error {e} must be a finite distance >= 0");
     }
-    let options = DecimationOptions {
-        target,
+    let options = MethodOptions {
         max_error: args.max_error,
-        ..Default::default()
+        fill_holes: args.fill_holes,
+        weights: args.weights.as_deref(),
+        seed: args.seed,
     };
+    let simplifier = Simplifier::new(args.method, target, &options)?;
     if args.input.is_dir() {
-        return run_folder(args, &options);
+        if args.preview.is_some() {
+            bail!(
+                "--preview renders one file; {} is a folder",
+                args.input.display()
+            );
+        }
+        return run_folder(args, &simplifier);
     }
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
     let guarded = if args.force { None } else { Some(&args.input) };
-    OutputGuard::new(guarded)
-        .overridable_by("--force")
-        .check(&args.output)?;
+    let guard =
+        OutputGuard::new(guarded.into_iter().chain(&args.weights)).overridable_by("--force");
+    guard.check(&args.output)?;
+    let preview = match &args.preview {
+        Some(path) if path == &args.output => {
+            bail!("--preview {} is also the output", path.display())
+        }
+        Some(path) => {
+            // The preview never replaces an input, --force or not.
+            OutputGuard::new(std::iter::once(&args.input).chain(&args.weights)).check(path)?;
+            Some(Preview {
+                path,
+                wireframe: args.wireframe,
+            })
+        }
+        None => None,
+    };
     let start = Instant::now();
     let bar = ProgressBar::hidden();
     bar.set_length(1000);
@@ -99,7 +144,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut shown = false;
-    let outcome = simplify_file(&args.input, &args.output, args.method, &options, &mut |f| {
+    let outcome = simplify_file(&args.input, &args.output, &simplifier, preview, &mut |f| {
         if !shown && start.elapsed() > Duration::from_secs(1) {
             bar.set_draw_target(ProgressDrawTarget::stderr());
             shown = true;
@@ -116,89 +161,47 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     Ok(())
 }
 
-/// What one simplified file reports.
-struct Outcome {
-    input_faces: usize,
-    input_vertices: usize,
-    faces: usize,
-    vertices: usize,
-    error: f64,
-    seconds: f64,
-    stop_reason: &'static str,
-    welded: bool,
+/// Where the side-by-side PNG goes and whether it shows edges.
+#[derive(Clone, Copy)]
+struct Preview<'a> {
+    path: &'a Path,
+    wireframe: bool,
 }
 
-impl Outcome {
-    /// The `--json` keys; a folder run adds the file paths.
-    fn to_json(&self, files: Option<(&Path, &Path)>) -> Value {
-        let mut value = json!({
-            "input_faces": self.input_faces,
-            "output_faces": self.faces,
-            "error": self.error,
-            "seconds": self.seconds,
-            "stop_reason": self.stop_reason,
-        });
-        if let (Some((input, output)), Some(map)) = (files, value.as_object_mut()) {
-            map.insert("input".into(), json!(input.display().to_string()));
-            map.insert("output".into(), json!(output.display().to_string()));
-        }
-        value
-    }
-
-    fn print(&self, input: &Path, output: &Path) {
-        println!(
-            "{}: {} faces, {} vertices -> {}: {} faces, {} vertices ({}{})",
-            input.display(),
-            self.input_faces,
-            self.input_vertices,
-            output.display(),
-            self.faces,
-            self.vertices,
-            self.stop_reason,
-            if self.welded { ", welded" } else { "" },
-        );
-        println!(
-            "error {:.3e} (input units), {:.3} s",
-            self.error, self.seconds
-        );
-    }
-}
-
-/// Reads, checks, simplifies and writes one file, reporting progress in [0, 1].
+/// Reads, checks, simplifies and writes one file (and its preview), reporting progress in
+/// [0, 1].
 fn simplify_file(
     input: &Path,
     output: &Path,
-    method: Method,
-    options: &DecimationOptions,
+    simplifier: &Simplifier,
+    preview: Option<Preview>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Outcome> {
     let mesh = read_input_mesh(input, InputUse::Surface)?;
-    check_target(&options.target, mesh.face_count())
+    let (simplified, outcome) = simplifier
+        .run(&mesh, progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
-    let start = Instant::now();
-    let result = match method {
-        Method::Qem => decimate_with_progress(&mesh, options, progress)
-            .with_context(|| format!("simplifying {}", input.display()))?,
-    };
-    let seconds = start.elapsed().as_secs_f64();
-    write_mesh(output, &result.mesh).with_context(|| format!("writing {}", output.display()))?;
-    Ok(Outcome {
-        input_faces: result.input_faces,
-        input_vertices: result.input_vertices,
-        faces: result.mesh.face_count(),
-        vertices: result.mesh.vertex_count(),
-        error: result.error_distance,
-        seconds,
-        stop_reason: result.stop_reason.as_str(),
-        welded: result.welded,
-    })
+    write_mesh(output, &simplified).with_context(|| format!("writing {}", output.display()))?;
+    if let Some(Preview { path, wireframe }) = preview {
+        let view = View {
+            wireframe,
+            ..View::default()
+        };
+        contact_sheet(&[mesh, simplified], 2, PREVIEW_TILE, view)
+            .and_then(|sheet| write_png(path, &sheet))
+            .with_context(|| format!("writing the preview {}", path.display()))?;
+    }
+    Ok(outcome)
 }
+
+/// Side of each preview tile, pixels.
+const PREVIEW_TILE: u32 = 768;
 
 /// Every mesh file of the folder `args.input` into the folder `args.output` under its own
 /// name, files in parallel with a progress bar over files. Every output is checked before
 /// anything is written; a file that fails is reported and the others go on; the run fails
 /// when any file did.
-fn run_folder(args: &SimplifyArgs, options: &DecimationOptions) -> Result<()> {
+fn run_folder(args: &SimplifyArgs, simplifier: &Simplifier) -> Result<()> {
     let files = mesh_files_in(&args.input)?;
     if files.is_empty() {
         bail!(
@@ -226,7 +229,7 @@ fn run_folder(args: &SimplifyArgs, options: &DecimationOptions) -> Result<()> {
         .par_iter()
         .zip(&outputs)
         .map(|(input, output)| {
-            let outcome = simplify_file(input, output, args.method, options, &mut |_| {});
+            let outcome = simplify_file(input, output, simplifier, None, &mut |_| {});
             bar.inc(1);
             outcome
         })
@@ -256,20 +259,4 @@ fn run_folder(args: &SimplifyArgs, options: &DecimationOptions) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// Fails unless `target` keeps between 1 and all of the input's `faces`.
-fn check_target(target: &Target, faces: usize) -> Result<()> {
-    match *target {
-        Target::Faces(0) => bail!("--faces 0: keep at least 1 face"),
-        Target::Faces(n) if n > faces => bail!(
-            "--faces {n} is more than the input's {faces} faces: choose at most {faces} \
-             (or copy the file)"
-        ),
-        Target::Ratio(r) if (r * faces as f64).round() < 1.0 => bail!(
-            "--ratio {r} keeps 0 of the input's {faces} faces: raise it to at least {:.3e}",
-            1.0 / faces as f64
-        ),
-        _ => Ok(()),
-    }
 }

@@ -188,6 +188,42 @@ fn simplify_names_a_file_without_faces() {
 }
 
 #[test]
+fn the_selecting_methods_give_a_result_or_one_line_naming_the_file() {
+    let f = files();
+    let out = Path::new(&f.good).with_file_name("out.ply");
+    let out = out.to_str().unwrap();
+    let run = |input: &str, method: &str| {
+        meshsimplify(&[
+            "simplify", input, "-o", out, "--ratio", "0.5", "--method", method,
+        ])
+    };
+    // Too small for the neural method: refused, naming the file and the limit.
+    let message = refused(&[
+        "simplify", &f.good, "-o", out, "--ratio", "0.5", "--method", "neural",
+    ]);
+    assert!(
+        message.contains(&f.good) && message.contains("at least 100"),
+        "{message}"
+    );
+    // pc+remesh re-meshes what it keeps; the faceless file is named as for qem.
+    let (ok, _, stderr) = run(&f.good, "pc+remesh");
+    assert!(ok, "{stderr}");
+    for method in ["neural", "pc+remesh"] {
+        let message = refused(&[
+            "simplify",
+            &f.faceless,
+            "-o",
+            out,
+            "--ratio",
+            "0.5",
+            "--method",
+            method,
+        ]);
+        assert!(message.contains("no faces"), "{message}");
+    }
+}
+
+#[test]
 fn simplify_refuses_face_targets_it_cannot_reach() {
     let f = files();
     let out = Path::new(&f.good).with_file_name("out.obj");

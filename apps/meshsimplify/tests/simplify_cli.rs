@@ -76,12 +76,177 @@ fn bad_arguments_write_nothing() {
         ],
         vec!["simplify", "missing.ply", "-o", out_path, "--ratio", "0.5"],
         vec!["simplify", &input, "-o", out_path],
+        // options of the other method
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
+            "--fill-holes",
+        ],
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
+            "--weights",
+            "w.safetensors",
+        ],
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
+            "--method",
+            "neural",
+            "--max-error",
+            "0.1",
+        ],
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
+            "--method",
+            "neural",
+            "--fill-holes",
+            "100000",
+        ],
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
+            "--method",
+            "neural",
+            "--weights",
+            "missing.safetensors",
+        ],
     ] {
         let out = meshsimplify(&args);
         assert!(!out.status.success(), "{args:?} should fail");
         assert!(!String::from_utf8_lossy(&out.stderr).trim().is_empty());
         assert!(!output.exists(), "{args:?} wrote a file");
     }
+}
+
+#[test]
+fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_watertightness() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sphere_file(dir.path());
+    let run = |name: &str, extra: &[&str]| {
+        let output = dir.path().join(name);
+        let mut args = vec![
+            "simplify",
+            &input,
+            "-o",
+            output.to_str().unwrap(),
+            "--ratio",
+            "0.1",
+            "--method",
+            "neural",
+            "--seed",
+            "3",
+            "--json",
+        ];
+        args.extend(extra);
+        let out = meshsimplify(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+        (
+            summary,
+            read_mesh(&output).unwrap(),
+            std::fs::read(&output).unwrap(),
+        )
+    };
+    let (summary, mesh, bytes) = run("a.ply", &[]);
+    // 10 % of the 2 562 vertices, every one at an input position.
+    assert_eq!(mesh.vertex_count(), 256);
+    assert!(summary["error"].is_null());
+    assert_eq!(
+        summary["output_faces"].as_u64().unwrap() as usize,
+        mesh.face_count()
+    );
+    assert!(mesh.face_count() > 100, "{summary}");
+    let report = mesh_report(&mesh);
+    assert!(report.edge_manifold);
+    assert_eq!(
+        summary["holes"].as_u64().unwrap() as usize,
+        report.boundary_loops
+    );
+    let (wa_raw, wa) = (
+        summary["wa_raw"].as_f64().unwrap(),
+        summary["wa"].as_f64().unwrap(),
+    );
+    assert!((0.0..=100.0).contains(&wa_raw) && (0.0..=100.0).contains(&wa));
+    // Seeded: the same run writes the same bytes; hole filling only adds faces.
+    assert_eq!(run("b.ply", &[]).2, bytes);
+    let (filled, filled_mesh, _) = run("c.ply", &["--fill-holes"]);
+    assert!(
+        filled["holes"].as_u64() <= summary["holes"].as_u64(),
+        "{filled}"
+    );
+    assert!(filled_mesh.face_count() >= mesh.face_count());
+    assert!(mesh_report(&filled_mesh).edge_manifold);
+}
+
+#[test]
+fn the_preview_shows_input_and_result_side_by_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sphere_file(dir.path());
+    let output = dir.path().join("small.ply");
+    let png = dir.path().join("preview.png");
+    let (out_path, png_path) = (output.to_str().unwrap(), png.to_str().unwrap());
+    let run = |extra: &[&str]| {
+        let mut args = vec!["simplify", &input, "-o", out_path, "--ratio", "0.1"];
+        args.extend(extra);
+        meshsimplify(&args)
+    };
+    let out = run(&["--preview", png_path, "--wireframe"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let size = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    assert_eq!(
+        (size(16), size(20)),
+        (2 * 768, 768),
+        "two tiles side by side"
+    );
+    // The preview may not replace the output or the input, nor be asked of a folder.
+    std::fs::remove_file(&output).unwrap();
+    for extra in [vec!["--preview", out_path], vec!["--preview", &input]] {
+        let out = run(&extra);
+        assert!(!out.status.success(), "{extra:?}");
+        assert!(!output.exists());
+    }
+    let folder = dir.path().to_str().unwrap();
+    let out = meshsimplify(&[
+        "simplify",
+        folder,
+        "-o",
+        out_path,
+        "--ratio",
+        "0.1",
+        "--preview",
+        png_path,
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("folder"));
 }
 
 #[test]
@@ -151,4 +316,76 @@ fn a_folder_is_simplified_file_by_file_and_a_bad_file_never_stops_the_batch() {
         out
     );
     assert_eq!(std::fs::read(input.join("b_cube.obj")).unwrap(), before);
+}
+
+#[test]
+fn bench_scores_every_method_and_ratio_and_lists_what_it_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    write_mesh(dir.path().join("a_sphere.ply"), &icosphere(3)).unwrap();
+    write_mesh(
+        dir.path().join("b_cube.obj"),
+        &meshgnn_geometry::subdivided_cube(6),
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("c_broken.obj"), "f 1 2 3\n").unwrap();
+    let json_out = dir.path().join("bench.json");
+    let out = meshsimplify(&[
+        "bench",
+        dir.path().to_str().unwrap(),
+        "--ratios",
+        "0.2,0.5",
+        "--methods",
+        "qem,neural,pc+remesh",
+        "--samples",
+        "2000",
+        "--json",
+        "--json-out",
+        json_out.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let written: Value = serde_json::from_slice(&std::fs::read(&json_out).unwrap()).unwrap();
+    assert_eq!(report, written);
+    // 2 ratios × 3 methods, each over the two readable meshes.
+    let results = report["results"].as_array().unwrap();
+    assert_eq!(results.len(), 6, "{report}");
+    assert!(results.iter().all(|r| r["files"] == 2));
+    assert_eq!(report["per_file"].as_array().unwrap().len(), 12);
+    for row in report["per_file"].as_array().unwrap() {
+        for key in ["cd", "wa", "le", "ne", "seconds"] {
+            assert!(row[key].as_f64().unwrap() >= 0.0, "{row}");
+        }
+        // QEM keeps the closed inputs closed.
+        if row["method"] == "qem" {
+            assert_eq!(row["wa"].as_f64().unwrap(), 0.0, "{row}");
+            assert_eq!(row["holes"], 0);
+        }
+    }
+    let skipped = report["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1);
+    assert_eq!(skipped[0]["file"], "c_broken.obj");
+    // The Markdown table: a header with every metric per ratio, one line per method.
+    let out = meshsimplify(&[
+        "bench",
+        dir.path().to_str().unwrap(),
+        "--ratios",
+        "0.5",
+        "--methods",
+        "qem,pc+remesh",
+        "--samples",
+        "2000",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("| method | CD @0.5 | WA @0.5 | LE @0.5 | NE @0.5 | s @0.5 |"),
+        "{text}"
+    );
+    assert!(
+        text.contains("| qem |") && text.contains("| pc+remesh |"),
+        "{text}"
+    );
 }

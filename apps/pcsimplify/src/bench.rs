@@ -10,13 +10,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use meshgnn_data::gaussian_noise;
 use meshgnn_geometry::{OutputGuard, atomic_write, mesh_files_in};
-use meshgnn_losses::metrics::{EVALUATION_CURVATURE_NEIGHBOURS, point_cloud_evaluation};
+use meshgnn_losses::metrics::{
+    EVALUATION_CURVATURE_NEIGHBOURS, TableColumn, comparison_table, point_cloud_evaluation,
+};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use crate::input::{Input, read_input};
 use crate::method::{Method, load_model, select, target_count};
-use meshgnn_models::point_simplifier::PointSimplifier;
+use meshgnn_models::point_selection::SelectionModel;
 
 /// Arguments of `pcsimplify bench`.
 #[derive(clap::Args, Debug)]
@@ -111,11 +113,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             args.dir.display()
         );
     }
-    let model = match args.methods.contains(&Method::Neural) {
-        true => Some(load_model(args.weights.as_deref())?),
-        false => None,
-    };
-    let job = |(i, path): (usize, &PathBuf)| bench_file(args, model.as_ref(), i, path);
+    // The trained model of each method (in `args.methods` order); `--weights` is the neural one.
+    let models: Vec<Option<SelectionModel>> = args
+        .methods
+        .iter()
+        .map(|&m| load_model(m, args.weights.as_deref().filter(|_| m == Method::Neural)))
+        .collect::<Result<_>>()?;
+    let job = |(i, path): (usize, &PathBuf)| bench_file(args, &models, i, path);
     let per_file: Vec<(Vec<Row>, Vec<Value>)> = if args.serial {
         files.iter().enumerate().map(job).collect::<Result<_>>()?
     } else {
@@ -168,7 +172,7 @@ fn file_name(path: &Path) -> String {
 /// Every method at every ratio on file `index`.
 fn bench_file(
     args: &BenchArgs,
-    model: Option<&PointSimplifier>,
+    models: &[Option<SelectionModel>],
     index: usize,
     path: &Path,
 ) -> Result<(Vec<Row>, Vec<Value>)> {
@@ -201,13 +205,13 @@ fn bench_file(
             skipped.push(json!({ "file": name, "ratio": ratio, "reason": reason }));
             continue;
         }
-        for &method in &args.methods {
+        for (&method, model) in args.methods.iter().zip(models) {
             if method == Method::Qem && input.mesh.is_none() {
                 skipped
                     .push(json!({ "file": name, "method": method.name(), "reason": "no faces" }));
                 continue;
             }
-            let selection = select(method, &input, count, args.seed, model)
+            let selection = select(method, &input, count, args.seed, model.as_ref())
                 .with_context(|| format!("{name}: {} at ratio {ratio}", method.name()))?;
             let kept = selection.kept_points(&input.points);
             let e = point_cloud_evaluation(&clean.points, &kept, args.k).with_context(|| {
@@ -308,50 +312,14 @@ fn to_markdown(args: &BenchArgs, names: &[String], rows: &[Row], skipped: &[Valu
             .collect::<Vec<_>>()
             .join("; ")
     );
-    // Header: one group of columns per ratio (Table 5.1 layout).
-    out.push_str("| method |");
-    for ratio in &args.ratios {
-        for (name, _, _, _) in COLUMNS {
-            out.push_str(&format!(" {name} @{ratio} |"));
-        }
-    }
-    out.push_str("\n|---|");
-    for _ in &args.ratios {
-        out.push_str(&"---:|".repeat(COLUMNS.len()));
-    }
-    out.push('\n');
-    let cells: Vec<Vec<Option<[f64; 6]>>> = args
-        .methods
-        .iter()
-        .map(|&m| {
-            args.ratios
-                .iter()
-                .map(|&r| means(rows, m, r).map(|c| c.1))
-                .collect()
-        })
-        .collect();
-    for (mi, method) in args.methods.iter().enumerate() {
-        out.push_str(&format!("| {} |", method.name()));
-        for ri in 0..args.ratios.len() {
-            for (c, (_, _, factor, _)) in COLUMNS.iter().enumerate() {
-                let Some(value) = cells[mi][ri].map(|m| m[c]) else {
-                    out.push_str(" n/a |");
-                    continue;
-                };
-                let best = cells
-                    .iter()
-                    .filter_map(|row| row[ri].map(|m| m[c]))
-                    .fold(f64::INFINITY, f64::min);
-                let text = format!("{:.3}", value * factor);
-                if value == best && args.methods.len() > 1 {
-                    out.push_str(&format!(" **{text}** |"));
-                } else {
-                    out.push_str(&format!(" {text} |"));
-                }
-            }
-        }
-        out.push('\n');
-    }
+    let methods: Vec<&str> = args.methods.iter().map(|m| m.name()).collect();
+    let columns = COLUMNS.map(|(name, _, factor, _)| TableColumn { name, factor });
+    out.push_str(&comparison_table(
+        &methods,
+        &args.ratios,
+        &columns,
+        |m, r| means(rows, args.methods[m], args.ratios[r]).map(|c| c.1.to_vec()),
+    ));
     out.push_str("\nSelection time per file (seconds, mean):\n\n| method |");
     for ratio in &args.ratios {
         out.push_str(&format!(" @{ratio} |"));

@@ -1,27 +1,26 @@
 //! The simplification methods `pcsimplify` offers (`meshgnn_models::point_selection`: the
-//! learned simplifier of ch. 5.3 and the ch. 5.5 baselines) applied to a read input, and the
-//! simplifier weights the neural method uses.
+//! learned simplifier of ch. 5.3, the point sampler of ch. 6 and the ch. 5.5 baselines)
+//! applied to a read input, and the weights the learned methods read.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use meshgnn_models::point_selection::{self, SelectionInput};
-use meshgnn_models::point_simplifier::{POINT_SIMPLIFIER_NAME, PointSimplifier};
-use meshgnn_models::pretrained;
+use meshgnn_models::point_selection::{self, SelectionInput, SelectionModel};
 
 pub use meshgnn_models::point_selection::{Selection, SelectionMethod as Method, target_count};
 
 use crate::input::Input;
 
-/// The learned simplifier: `--weights FILE` or the bundled default weights.
-pub fn load_model(weights: Option<&Path>) -> Result<PointSimplifier> {
-    match weights {
-        Some(path) => PointSimplifier::load(path)
-            .with_context(|| format!("loading the simplifier weights {}", path.display())),
-        None => pretrained::load(POINT_SIMPLIFIER_NAME).context(
-            "loading the bundled simplifier weights (pass --weights FILE, or choose another --method)",
+/// The trained model `method` reads: `--weights FILE` or the bundled weights; none for the
+/// classical methods.
+pub fn load_model(method: Method, weights: Option<&Path>) -> Result<Option<SelectionModel>> {
+    SelectionModel::for_method(method, weights).with_context(|| match weights {
+        Some(path) => format!("loading the {} weights {}", method.name(), path.display()),
+        None => format!(
+            "loading the bundled {} weights (pass --weights FILE, or choose another --method)",
+            method.name()
         ),
-    }
+    })
 }
 
 /// Runs `method` on `input` to keep exactly `count` points (`point_selection::select`).
@@ -30,7 +29,7 @@ pub fn select(
     input: &Input,
     count: usize,
     seed: u64,
-    model: Option<&PointSimplifier>,
+    model: Option<&SelectionModel>,
 ) -> Result<Selection> {
     let view = SelectionInput {
         points: &input.points,

@@ -39,8 +39,8 @@ pub struct SimplifyArgs {
     /// Selection method.
     #[arg(short, long, value_enum, default_value_t = Method::DEFAULT)]
     pub method: Method,
-    /// Weights of the neural simplifier (safetensors from `pcsimplify train`); default: the
-    /// bundled ones.
+    /// Weights of the learned method (safetensors from `pcsimplify train` for neural, from the
+    /// mesh simplifier's training for sampler); default: the bundled ones.
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Seed of every random choice (FPS start point, random sampling, latent FPS start).
@@ -78,10 +78,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     let n = input.points.len();
     let count = target_count(n, args.ratio, args.points)
         .with_context(|| format!("simplifying {}", args.input.display()))?;
-    let model = match args.method {
-        Method::Neural => Some(load_model(args.weights.as_deref())?),
-        _ => None,
-    };
+    let model = load_model(args.method, args.weights.as_deref())?;
     let selection = select(args.method, &input, count, args.seed, model.as_ref())
         .with_context(|| format!("simplifying {}", args.input.display()))?;
     let kept = kept_cloud(&input, &selection)?;

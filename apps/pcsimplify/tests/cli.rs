@@ -100,7 +100,7 @@ fn simplify_writes_exactly_the_requested_count_with_every_method() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("cloud.xyz");
     write_xyz(&input, &sphere_points(20)); // 400 points
-    for method in ["fps", "random", "tcp"] {
+    for method in ["fps", "random", "tcp", "sampler"] {
         for (flag, value, expected) in [("--ratio", "0.1", 40), ("--points", "37", 37)] {
             let output = dir.path().join(format!("{method}_{expected}.ply"));
             let out = pcsimplify(&[

@@ -1,8 +1,9 @@
 //! Point-cloud simplification by any method of thesis ch. 5 through one entry point: the
-//! learned simplifier of ch. 5.3 and the ch. 5.5 baselines (FPS, random, TCP, QEM), each
-//! keeping exactly the requested number of points. This crate depends on every crate the
+//! learned simplifier of ch. 5.3, the point sampler of ch. 6.3.1 (Table 6.2) and the ch. 5.5
+//! baselines (FPS, random, TCP, QEM), each keeping exactly the requested number of points. This crate depends on every crate the
 //! methods span (geometry, graph, losses), so the dispatcher lives here, not in an app.
 
+use std::path::Path;
 use std::time::Instant;
 
 use meshgnn_geometry::{TriMesh, curvature_features};
@@ -12,8 +13,9 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::EVALUATION_CURVATURE_NEIGHBOURS;
 
-use crate::point_simplifier::{PointSimplifier, SimplifyOptions};
-use crate::{Error, Result};
+use crate::mesh_simplifier::{NEURAL_MESH_SIMPLIFIER_NAME, NeuralMeshSimplifier};
+use crate::point_simplifier::{POINT_SIMPLIFIER_NAME, PointSimplifier, SimplifyOptions};
+use crate::{Error, Result, pretrained};
 
 /// A point-selection method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -22,6 +24,10 @@ pub enum SelectionMethod {
     /// The learned simplifier (ch. 5.3): projector, latent FPS, AttRef; mesh adjacency for
     /// mesh inputs, else a k = 7 k-NN.
     Neural,
+    /// The point sampler of the neural mesh simplifier alone (ch. 6.3.1): learnt inclusion
+    /// probabilities, a spatially balanced draw; mesh adjacency for mesh inputs, else a
+    /// 6-NN.
+    Sampler,
     /// Farthest point sampling (exact, kd-tree pruned), first point drawn with the seed.
     Fps,
     /// Uniform random sampling without replacement, seeded.
@@ -45,8 +51,9 @@ impl SelectionMethod {
     ];
 
     /// Every method, in the order of [`SelectionMethod::name`]'s listing.
-    pub const ALL: [SelectionMethod; 5] = [
+    pub const ALL: [SelectionMethod; 6] = [
         SelectionMethod::Neural,
+        SelectionMethod::Sampler,
         SelectionMethod::Fps,
         SelectionMethod::Random,
         SelectionMethod::Tcp,
@@ -68,11 +75,39 @@ impl SelectionMethod {
     pub fn name(self) -> &'static str {
         match self {
             Self::Neural => "neural",
+            Self::Sampler => "sampler",
             Self::Fps => "fps",
             Self::Random => "random",
             Self::Tcp => "tcp",
             Self::Qem => "qem",
         }
+    }
+}
+
+/// The trained model a learned method reads.
+#[derive(Clone, Debug)]
+pub enum SelectionModel {
+    /// The ch. 5.3 simplifier, for [`SelectionMethod::Neural`].
+    Simplifier(PointSimplifier),
+    /// The ch. 6 neural mesh simplifier, whose point sampler [`SelectionMethod::Sampler`] runs.
+    MeshSimplifier(NeuralMeshSimplifier),
+}
+
+impl SelectionModel {
+    /// The model `method` reads, from the checkpoint `weights` or else the bundled one;
+    /// `None` for the classical methods.
+    pub fn for_method(method: SelectionMethod, weights: Option<&Path>) -> Result<Option<Self>> {
+        Ok(match method {
+            SelectionMethod::Neural => Some(Self::Simplifier(match weights {
+                Some(path) => PointSimplifier::load(path)?,
+                None => pretrained::load(POINT_SIMPLIFIER_NAME)?,
+            })),
+            SelectionMethod::Sampler => Some(Self::MeshSimplifier(match weights {
+                Some(path) => NeuralMeshSimplifier::load(path)?,
+                None => pretrained::load(NEURAL_MESH_SIMPLIFIER_NAME)?,
+            })),
+            _ => None,
+        })
     }
 }
 
@@ -159,13 +194,14 @@ pub fn target_count(n: usize, ratio: Option<f64>, points: Option<usize>) -> Resu
 }
 
 /// Runs `method` on `input` to keep exactly `count` points; `seed` drives every random
-/// choice; `model` is the learned simplifier (needed for [`SelectionMethod::Neural`] only).
+/// choice; `model` is the trained model of a learned method
+/// ([`SelectionModel::for_method`]).
 pub fn select(
     method: SelectionMethod,
     input: &SelectionInput<'_>,
     count: usize,
     seed: u64,
-    model: Option<&PointSimplifier>,
+    model: Option<&SelectionModel>,
 ) -> Result<Selection> {
     let n = input.points.len();
     let invalid = |reason: String| Error::Invalid {
@@ -179,12 +215,21 @@ pub fn select(
     let mut mesh = None;
     let indices = match method {
         SelectionMethod::Neural => {
-            let Some(model) = model else {
+            let Some(SelectionModel::Simplifier(model)) = model else {
                 return Err(invalid(
-                    "the neural method needs the simplifier weights".into(),
+                    "the neural method needs the point simplifier's weights".into(),
                 ));
             };
             return select_neural(model, input, count, seed);
+        }
+        SelectionMethod::Sampler => {
+            let Some(SelectionModel::MeshSimplifier(model)) = model else {
+                return Err(invalid(
+                    "the sampler needs the neural mesh simplifier's weights".into(),
+                ));
+            };
+            let adjacency = input.mesh.map(vertex_adjacency).transpose()?;
+            model.sample_points(input.points, adjacency.as_ref(), count, seed)?
         }
         SelectionMethod::Fps => {
             fast_farthest_point_sampling(input.points, count, FpsStart::Seeded(seed))?
@@ -263,14 +308,14 @@ mod tests {
 
     /// An untrained simplifier (random weights): exercises the neural path without the
     /// bundled weights.
-    fn random_model() -> PointSimplifier {
+    fn random_model() -> SelectionModel {
         let map = candle_nn::VarMap::new();
         let vb = candle_nn::VarBuilder::from_varmap(
             &map,
             candle_core::DType::F32,
             &candle_core::Device::Cpu,
         );
-        PointSimplifier::new(vb, &Default::default()).unwrap()
+        SelectionModel::Simplifier(PointSimplifier::new(vb, &Default::default()).unwrap())
     }
 
     fn distinct(indices: &[u32]) -> usize {
@@ -311,6 +356,20 @@ mod tests {
             }
         }
         assert!(select(SelectionMethod::Neural, &sphere, 10, 0, None).is_err());
+        // The sampler with the bundled weights, on the mesh and on the bare cloud.
+        let sampler = SelectionModel::for_method(SelectionMethod::Sampler, None).unwrap();
+        for input in [&sphere, &cloud] {
+            for count in [1, 64, 642] {
+                let s =
+                    select(SelectionMethod::Sampler, input, count, 7, sampler.as_ref()).unwrap();
+                assert_eq!(distinct(&s.indices), count);
+                let again = select(SelectionMethod::Sampler, input, count, 7, sampler.as_ref());
+                assert_eq!(again.unwrap().indices, s.indices, "seeded");
+            }
+        }
+        // Each learned method refuses the other's model.
+        assert!(select(SelectionMethod::Sampler, &sphere, 10, 0, Some(&model)).is_err());
+        assert!(select(SelectionMethod::Neural, &sphere, 10, 0, sampler.as_ref()).is_err());
         for method in [
             SelectionMethod::Fps,
             SelectionMethod::Random,

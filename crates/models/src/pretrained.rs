@@ -9,6 +9,7 @@
 //! | `point_simplifier` | the point simplifier of ch. 5.3 (docs/pcsimplify_model.md) | [`crate::point_simplifier::PointSimplifier`] |
 //! | `expression_generator` | the ch. 4 expression generator, residual decoder: blendshapes + spiral remainder (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
 //! | `expression_blendshape` | its PCA blendshape baseline (docs/expression_model.md) | [`crate::expression::ExpressionModel`] |
+//! | `neural_mesh_simplifier` | the ch. 6 neural mesh simplifier (docs/mesh_simplifier_model.md) | [`crate::mesh_simplifier::NeuralMeshSimplifier`] |
 
 use std::path::Path;
 
@@ -22,7 +23,7 @@ struct Bundled {
 }
 
 /// Every bundled model, by name.
-const BUNDLED: [Bundled; 4] = [
+const BUNDLED: [Bundled; 5] = [
     Bundled {
         name: "hand_autoencoder",
         bytes: include_bytes!("../weights/hand_autoencoder.safetensors"),
@@ -42,6 +43,11 @@ const BUNDLED: [Bundled; 4] = [
         name: "expression_blendshape",
         bytes: include_bytes!("../weights/expression_blendshape.safetensors"),
         manifest: include_str!("../weights/expression_blendshape.manifest.json"),
+    },
+    Bundled {
+        name: "neural_mesh_simplifier",
+        bytes: include_bytes!("../weights/neural_mesh_simplifier.safetensors"),
+        manifest: include_str!("../weights/neural_mesh_simplifier.manifest.json"),
     },
 ];
 
@@ -180,6 +186,13 @@ mod tests {
             };
             assert!(moved(&frames[1]) > 2.0 && moved(&frames[0]) < 1.0, "{name}");
         }
+        // The trained simplifier keeps faces where the untrained one keeps none.
+        let simplifier: crate::mesh_simplifier::NeuralMeshSimplifier =
+            load("neural_mesh_simplifier").unwrap();
+        let sphere = meshgnn_geometry::icosphere(4); // 2 562 vertices
+        let out = simplifier.simplify(&sphere, 256, 0, Some(30)).unwrap();
+        assert!(out.mesh.face_count() > 400, "{} faces", out.mesh.face_count());
+        assert!(meshgnn_geometry::is_edge_manifold(&out.mesh));
         let err = load::<LoadedHandModel>("nothing").unwrap_err().to_string();
         assert!(err.contains("hand_autoencoder, point_simplifier"), "{err}");
     }

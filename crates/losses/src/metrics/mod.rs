@@ -1,6 +1,7 @@
 //! Evaluation metrics as plain Rust (f64 accumulation, rayon, `SpatialIndex` nearest neighbours).
 
 mod chamfer;
+mod comparison_table;
 mod curvature_error;
 mod hausdorff;
 mod laplacian_error;
@@ -18,6 +19,7 @@ mod structural_distortion;
 mod watertightness;
 
 pub use chamfer::{ChamferDistance, chamfer_distance};
+pub use comparison_table::{TableColumn, comparison_table};
 pub use curvature_error::curvature_error;
 pub use hausdorff::hausdorff_distance;
 pub use laplacian_error::{LAPLACIAN_EIGENVECTORS, laplacian_error};

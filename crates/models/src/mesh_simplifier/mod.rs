@@ -4,8 +4,9 @@
 //! triangles (ch. 6.3.2, eq. 6.2-6.5), the face classifier with its TriConv layer (ch. 6.3.3,
 //! eq. 6.6-6.7), the model that chains them with the final manifold pass, the eq. 6.14
 //! objective of one pass, and the supervised training that replaces it (Voronoi-dual targets
-//! for edges and faces, QEM importance for the sampler: [`SimplifierTraining`]). Not yet here:
-//! bundled weights and the `meshsimplify --method neural` app.
+//! for edges and faces, QEM importance for the sampler: [`SimplifierTraining`]). Bundled
+//! weights: `pretrained::load("neural_mesh_simplifier")`; apps: `meshsimplify simplify
+//! --method neural`, `pcsimplify simplify --method sampler` (the point sampler alone).
 
 mod candidate_features;
 mod checkpoint;
@@ -33,7 +34,7 @@ pub use face_graph::FaceGraph;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
-    NeuralSimplification, SimplifierPass,
+    NeuralSimplification, SAMPLER_CLOUD_NEIGHBOURS, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{

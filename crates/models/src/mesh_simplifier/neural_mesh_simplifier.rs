@@ -19,7 +19,7 @@ use meshgnn_geometry::{
     TriMesh, boundary_loops, close_cracks, fill_holes, select_manifold_faces,
     unit_sphere_normalization, vertex_normals,
 };
-use meshgnn_graph::{CsrMatrix, vertex_adjacency};
+use meshgnn_graph::{CsrMatrix, knn_graph, vertex_adjacency};
 use meshgnn_losses::metrics::watertightness;
 
 use super::{
@@ -28,6 +28,10 @@ use super::{
     SampledPoints,
 };
 use crate::{Error, Result};
+
+/// Neighbours of a point in a cloud for the point sampler alone: a mesh vertex has six on
+/// average, and the sampler's DevConv learnt on mesh one-rings.
+pub const SAMPLER_CLOUD_NEIGHBOURS: usize = 6;
 
 /// Face probability above which a candidate is kept (ch. 6.4).
 pub const FACE_THRESHOLD: f32 = 0.5;
@@ -199,6 +203,42 @@ impl NeuralMeshSimplifier {
             candidates,
             face_probabilities,
         })
+    }
+
+    /// The point sampler alone (ch. 6.3.1, Table 6.2): `target` of `points` (`1 ≤ target ≤ N`)
+    /// drawn by the learnt inclusion probabilities with the balanced draw, seeded; DevConv
+    /// runs over `adjacency` (a mesh's vertex adjacency) or, for a cloud, the
+    /// [`SAMPLER_CLOUD_NEIGHBOURS`]-NN graph.
+    pub fn sample_points(
+        &self,
+        points: &[[f32; 3]],
+        adjacency: Option<&CsrMatrix>,
+        target: usize,
+        seed: u64,
+    ) -> Result<Vec<u32>> {
+        let positions = unit_sphere_normalization(points)?.apply(points);
+        let slots = match adjacency {
+            Some(adjacency) => NeighbourSlots::from_adjacency(adjacency, &self.device)?,
+            None => {
+                let k = SAMPLER_CLOUD_NEIGHBOURS.min(points.len().saturating_sub(1));
+                let rows: Vec<Vec<u32>> = if k == 0 {
+                    vec![Vec::new(); points.len()]
+                } else {
+                    knn_graph(&positions, k)?
+                        .indices
+                        .chunks(k)
+                        .map(<[u32]>::to_vec)
+                        .collect()
+                };
+                NeighbourSlots::from_rows(&rows, &self.device)?
+            }
+        };
+        let tensor =
+            Tensor::from_slice(positions.as_flattened(), (positions.len(), 3), &self.device)?;
+        Ok(self
+            .sampler
+            .sample(&tensor, &positions, &slots, target, seed)?
+            .indices)
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
