@@ -191,7 +191,11 @@ mod tests {
             load("neural_mesh_simplifier").unwrap();
         let sphere = meshgnn_geometry::icosphere(4); // 2 562 vertices
         let out = simplifier.simplify(&sphere, 256, 0, Some(30)).unwrap();
-        assert!(out.mesh.face_count() > 400, "{} faces", out.mesh.face_count());
+        assert!(
+            out.mesh.face_count() > 400,
+            "{} faces",
+            out.mesh.face_count()
+        );
         assert!(meshgnn_geometry::is_edge_manifold(&out.mesh));
         let err = load::<LoadedHandModel>("nothing").unwrap_err().to_string();
         assert!(err.contains("hand_autoencoder, point_simplifier"), "{err}");
