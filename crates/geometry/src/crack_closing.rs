@@ -5,8 +5,9 @@
 //! Candidates, most probable first (ties by index), are added where at least two of their
 //! edges lie on the border (one face each) and none already has two faces, oriented to run
 //! those border edges against their faces; passes repeat while any is added, as each closed
-//! crack can make the next one closable. The faces stay edge-manifold and consistently
-//! oriented; a candidate that would need two orientations at once is skipped.
+//! crack can make the next one closable. The faces stay edge-manifold, and an added face runs
+//! every border edge it closes against its neighbour; a candidate that would need two
+//! orientations at once is skipped.
 
 use std::collections::{HashMap, HashSet};
 

@@ -2,7 +2,7 @@
 //! `M` vertices, the edge predictor connects them (`A_s`) and proposes candidate triangles, the
 //! face classifier scores each. [`NeuralMeshSimplifier::forward`] returns everything the
 //! eq. 6.14 loss needs; [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5`
-//! (ch. 6.4), makes them edge-manifold and consistently oriented
+//! (ch. 6.4), makes them edge-manifold, each facing along the input's normals
 //! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the holes left: first
 //! the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then every
 //! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]).
