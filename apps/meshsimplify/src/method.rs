@@ -14,8 +14,7 @@ use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
 use meshgnn_models::mesh_simplifier::{NEURAL_MESH_SIMPLIFIER_NAME, NeuralMeshSimplifier};
 use meshgnn_models::point_selection::{SelectionInput, SelectionMethod, SelectionModel, select};
-use meshgnn_models::point_simplifier::{POINT_SIMPLIFIER_NAME, PointSimplifier};
-use meshgnn_models::{LoadCheckpoint, pretrained};
+use meshgnn_models::pretrained;
 use serde_json::{Value, json};
 
 /// Simplification methods.
@@ -110,7 +109,13 @@ impl Simplifier {
                         meshgnn_geometry::MAX_FILLED_HOLE_EDGES
                     );
                 }
-                let model = load(options.weights, NEURAL_MESH_SIMPLIFIER_NAME, "neural")?;
+                let model = match options.weights {
+                    Some(path) => NeuralMeshSimplifier::load(path).with_context(|| {
+                        format!("loading the neural simplifier weights {}", path.display())
+                    })?,
+                    None => pretrained::load(NEURAL_MESH_SIMPLIFIER_NAME)
+                        .context("loading the bundled neural simplifier weights")?,
+                };
                 Ok(Self::Neural {
                     model: Box::new(model),
                     target,
@@ -119,10 +124,19 @@ impl Simplifier {
                 })
             }
             Method::PcRemesh => {
-                let model: PointSimplifier =
-                    load(options.weights, POINT_SIMPLIFIER_NAME, "point-cloud")?;
+                let model = SelectionModel::for_method(SelectionMethod::Neural, options.weights)
+                    .with_context(|| match options.weights {
+                        Some(path) => {
+                            format!(
+                                "loading the point-cloud simplifier weights {}",
+                                path.display()
+                            )
+                        }
+                        None => "loading the bundled point-cloud simplifier weights".into(),
+                    })?
+                    .context("the point-cloud simplifier has no model")?;
                 Ok(Self::PcRemesh {
-                    model: Box::new(SelectionModel::Simplifier(model)),
+                    model: Box::new(model),
                     target,
                     seed: options.seed,
                 })
@@ -230,18 +244,6 @@ impl Simplifier {
 /// The fewest faces the neural method accepts: below it the sampled vertices are too few for
 /// the candidate triangles it learnt on (a 12-face cube at half its vertices kept one face).
 pub const MIN_NEURAL_FACES: usize = 100;
-
-/// The weights in `path`, or the bundled model `name`.
-fn load<M: LoadCheckpoint>(path: Option<&Path>, name: &str, what: &str) -> Result<M> {
-    match path {
-        Some(path) => std::fs::read(path)
-            .map_err(anyhow::Error::from)
-            .and_then(|bytes| Ok(M::from_checkpoint_bytes(&bytes, path)?))
-            .with_context(|| format!("loading the {what} simplifier weights {}", path.display())),
-        None => pretrained::load(name)
-            .with_context(|| format!("loading the bundled {what} simplifier weights")),
-    }
-}
 
 /// The vertex count a selecting method keeps for `target` (module docs), at least 3.
 fn target_vertices(target: &Target, mesh: &TriMesh) -> usize {
