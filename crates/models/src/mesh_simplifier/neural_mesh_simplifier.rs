@@ -243,7 +243,8 @@ impl NeuralMeshSimplifier {
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
     /// then the manifold pass (module docs), then, with `fill_holes_up_to: Some(k)`, the
-    /// cracks closed with rejected candidates and every hole of at most `k` edges filled. Errors on a mesh without faces, a bad target or `k` above
+    /// cracks closed with rejected candidates and every hole of at most `k` edges filled.
+    /// Errors on a mesh without faces, a bad target or `k` above
     /// [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`].
     pub fn simplify(
         &self,
