@@ -34,13 +34,19 @@ def simplify(
     faces: Optional[int] = None,
     method: str = "qem",
     max_error: Optional[float] = None,
+    seed: int = 0,
+    weights: Optional[_Path] = None,
+    fill_holes: Optional[int] = None,
     return_vertex_map: bool = False,
     return_info: bool = False,
 ) -> Tuple[Any, ...]:
-    """QEM edge collapse to `ratio` of the faces or to `faces` faces (exactly one).
-    Returns (V', F'), then vertex_map (vertex_map[i]: the output vertex input vertex i was
-    merged into) with return_vertex_map, then a dict (input_faces, output_faces, error,
-    stop_reason, collapses) with return_info."""
+    """QEM edge collapse (method "qem") or the neural mesh simplifier of thesis ch. 6 (method
+    "neural", bundled weights or `weights`, seeded, holes of at most `fill_holes` edges closed)
+    to `ratio` of the faces or to `faces` faces (exactly one). Returns (V', F'), then
+    vertex_map (vertex_map[i]: the output vertex input vertex i was merged into, or kept as;
+    -1 for a vertex the neural method dropped) with return_vertex_map, then a dict
+    (input_faces, output_faces, error, stop_reason, and collapses for QEM or wa_raw, wa, holes
+    for neural) with return_info."""
 
 def mesh_hierarchy(
     V: _Floats,

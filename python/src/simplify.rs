@@ -1,7 +1,12 @@
 //! `simplify`: QEM edge collapse (`meshgnn_graph::decimate`, the engine of `meshsimplify
-//! simplify`) on numpy arrays.
+//! simplify`) or the neural mesh simplifier of thesis ch. 6 (`NeuralMeshSimplifier`, bundled
+//! weights) on numpy arrays.
+
+use std::path::PathBuf;
 
 use meshgnn_graph::{DecimationOptions, Target, decimate};
+use meshgnn_models::mesh_simplifier::NeuralMeshSimplifier;
+use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -10,13 +15,17 @@ use crate::arrays::index_vector_out;
 use crate::errors::value_error;
 use crate::mesh_io::{mesh_out, surface_mesh_in};
 
-/// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None,
-/// return_vertex_map=False, return_info=False) -> (V', F'[, vertex_map][, info])`: exactly one
-/// of `ratio` (of the faces, in (0, 1]) and `faces` (a count in 1..=m). `vertex_map[i]` is the
-/// output vertex input vertex `i` was merged into; `info` holds the keys of `meshsimplify
-/// simplify --json` (`input_faces`, `output_faces`, `error`, `stop_reason`) and `collapses`.
+/// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None, seed=0,
+/// weights=None, fill_holes=None, return_vertex_map=False, return_info=False) -> (V', F'[,
+/// vertex_map][, info])`: exactly one of `ratio` (of the faces, in (0, 1]) and `faces` (a count
+/// in 1..=m). `vertex_map[i]` is the output vertex input vertex `i` was merged into (QEM) or
+/// kept as (neural; -1 for a vertex not kept); `info` holds the keys of `meshsimplify simplify
+/// --json` (`input_faces`, `output_faces`, `error`, `stop_reason`, and `collapses` for QEM,
+/// `wa_raw`, `wa`, `holes` for neural). `max_error` is QEM's; `seed`, `weights` (a checkpoint
+/// instead of the bundled weights) and `fill_holes` (close holes of at most that many edges)
+/// the neural method's.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, return_vertex_map=false, return_info=false))]
+#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, seed=0, weights=None, fill_holes=None, return_vertex_map=false, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn simplify<'py>(
     py: Python<'py>,
@@ -26,23 +35,37 @@ pub fn simplify<'py>(
     faces: Option<usize>,
     method: &str,
     max_error: Option<f64>,
+    seed: u64,
+    weights: Option<PathBuf>,
+    fill_holes: Option<usize>,
     return_vertex_map: bool,
     return_info: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    match method {
-        "qem" => {}
-        "neural" => {
-            return Err(PyValueError::new_err(
-                "method=\"neural\": the neural mesh simplifier (thesis ch. 6) is not bound to \
-                 Python yet (it runs as `meshsimplify simplify --method neural`); use \
-                 method=\"qem\"",
-            ));
-        }
+    let neural = match method {
+        "qem" => false,
+        "neural" => true,
         other => {
             return Err(PyValueError::new_err(format!(
-                "method={other:?}: choose \"qem\""
+                "method={other:?}: choose \"qem\" or \"neural\""
             )));
         }
+    };
+    let refuse = |given: bool, option: &str| {
+        if given {
+            Err(PyValueError::new_err(format!(
+                "{option}= applies to method=\"{}\" only",
+                if neural { "qem" } else { "neural" }
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    if neural {
+        refuse(max_error.is_some(), "max_error")?;
+    } else {
+        refuse(seed != 0, "seed")?;
+        refuse(weights.is_some(), "weights")?;
+        refuse(fill_holes.is_some(), "fill_holes")?;
     }
     if let Some(e) = max_error
         && !(e >= 0.0 && e.is_finite())
@@ -51,24 +74,60 @@ pub fn simplify<'py>(
             "max_error={e}: must be a finite distance >= 0"
         )));
     }
+    if let Some(k) = fill_holes
+        && k > meshgnn_geometry::MAX_FILLED_HOLE_EDGES
+    {
+        return Err(PyValueError::new_err(format!(
+            "fill_holes={k}: fill holes of at most {} edges",
+            meshgnn_geometry::MAX_FILLED_HOLE_EDGES
+        )));
+    }
     let mesh = surface_mesh_in(v, f)?;
     let target = target(ratio, faces, mesh.face_count())?;
-    let options = DecimationOptions {
-        target,
-        max_error,
-        ..Default::default()
-    };
-    let result = py
-        .detach(|| decimate(&mesh, &options))
-        .map_err(|e| value_error("simplify", e))?;
     let info = PyDict::new(py);
-    info.set_item("input_faces", result.input_faces)?;
-    info.set_item("output_faces", result.mesh.face_count())?;
-    info.set_item("error", result.error_distance)?;
-    info.set_item("stop_reason", result.stop_reason.as_str())?;
-    info.set_item("collapses", result.collapses)?;
-    let map = return_vertex_map.then(|| index_vector_out(py, &result.vertex_map));
-    let (vertices, triangles) = mesh_out(py, result.mesh)?;
+    info.set_item("input_faces", mesh.face_count())?;
+    let (simplified, map) = if neural {
+        let result = py
+            .detach(|| {
+                NeuralMeshSimplifier::load_or_bundled(weights.as_deref())?.simplify_to(
+                    &mesh,
+                    &target,
+                    seed,
+                    fill_holes,
+                )
+            })
+            .map_err(|e| value_error("simplify", e))?;
+        info.set_item("output_faces", result.mesh.face_count())?;
+        info.set_item("error", py.None())?;
+        info.set_item("stop_reason", "target_reached")?;
+        info.set_item("wa_raw", result.wa_raw)?;
+        info.set_item("wa", result.wa)?;
+        info.set_item("holes", result.holes)?;
+        let map = return_vertex_map.then(|| {
+            let mut map = vec![-1i64; mesh.vertex_count()];
+            for (output, &input) in result.vertex_map.iter().enumerate() {
+                map[input as usize] = output as i64;
+            }
+            map.into_pyarray(py)
+        });
+        (result.mesh, map)
+    } else {
+        let options = DecimationOptions {
+            target,
+            max_error,
+            ..Default::default()
+        };
+        let result = py
+            .detach(|| decimate(&mesh, &options))
+            .map_err(|e| value_error("simplify", e))?;
+        info.set_item("output_faces", result.mesh.face_count())?;
+        info.set_item("error", result.error_distance)?;
+        info.set_item("stop_reason", result.stop_reason.as_str())?;
+        info.set_item("collapses", result.collapses)?;
+        let map = return_vertex_map.then(|| index_vector_out(py, &result.vertex_map));
+        (result.mesh, map)
+    };
+    let (vertices, triangles) = mesh_out(py, simplified)?;
     let mut out = vec![vertices.into_any(), triangles.into_any()];
     out.extend(map.map(Bound::into_any));
     if return_info {

@@ -55,6 +55,38 @@ def test_simplify_matches_the_command_line_tool(tmp_path, creature_path, cli):
     assert len(F2) <= 4461
 
 
+def test_neural_simplify_matches_the_command_line_tool(tmp_path, creature_path, cli):
+    V, F = meshgnn.read_mesh(creature_path)
+    V2, F2, vertex_map, info = meshgnn.simplify(
+        V, F, ratio=0.05, method="neural", seed=2, fill_holes=30,
+        return_vertex_map=True, return_info=True,
+    )
+    out = tmp_path / "cli.ply"
+    report = subprocess.run(
+        [cli("meshsimplify"), "simplify", creature_path, "-o", out, "--ratio", "0.05",
+         "--method", "neural", "--seed", "2", "--fill-holes", "30", "--json"],
+        check=True, capture_output=True, text=True,
+    )
+    expected = json.loads(report.stdout)
+    for key in ("input_faces", "output_faces", "error", "stop_reason", "wa_raw", "wa", "holes"):
+        assert info[key] == expected[key], key
+    V_cli, F_cli = meshgnn.read_mesh(out)
+    np.testing.assert_array_equal(F2, F_cli)
+    np.testing.assert_array_equal(V2, V_cli)
+    # The neural method selects: each kept vertex is an input vertex, the rest map to -1.
+    kept = np.flatnonzero(vertex_map >= 0)
+    assert len(kept) == len(V2) == round(0.05 * len(V))
+    np.testing.assert_array_equal(V2[vertex_map[kept]], V[kept])
+    assert (vertex_map[vertex_map < 0] == -1).all()
+
+
+def test_neural_simplify_refuses_small_meshes(icosphere_path):
+    V, F = meshgnn.read_mesh(icosphere_path)
+    with pytest.raises(ValueError) as error:
+        meshgnn.simplify(V, F[:80], ratio=0.5, method="neural")
+    assert "80 faces" in str(error.value) and "at least 100" in str(error.value)
+
+
 def test_simplify_accepts_float64_and_int32_and_ratio(icosphere_path):
     V, F = meshgnn.read_mesh(icosphere_path)
     a = meshgnn.simplify(V, F, ratio=0.25)
@@ -97,9 +129,13 @@ def test_simplify_rejects_bad_arrays_with_one_line(icosphere_path, change, messa
         ({"ratio": 1e-9}, "keeps 0 of the input's 320 faces"),
         ({"faces": 0}, "faces=0"),
         ({"faces": 321}, "more than the input's 320 faces"),
-        ({"ratio": 0.5, "method": "neural"}, "not bound to Python yet"),
         ({"ratio": 0.5, "method": "edge"}, 'method="edge"'),
         ({"ratio": 0.5, "max_error": -1.0}, "max_error=-1"),
+        ({"ratio": 0.5, "seed": 3}, 'seed= applies to method="neural" only'),
+        ({"ratio": 0.5, "fill_holes": 30}, 'fill_holes= applies to method="neural" only'),
+        ({"ratio": 0.5, "method": "neural", "max_error": 1.0}, 'applies to method="qem" only'),
+        ({"ratio": 0.5, "method": "neural", "fill_holes": 5000}, "fill_holes=5000"),
+        ({"ratio": 0.5, "method": "neural", "weights": "missing.safetensors"}, "missing.safetensors"),
     ],
 )
 def test_simplify_rejects_bad_requests(icosphere_path, kwargs, message):

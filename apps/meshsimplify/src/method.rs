@@ -3,8 +3,7 @@
 //! `bench` (Table 6.1).
 //!
 //! `qem` targets faces; `neural` and `pc+remesh` select vertices, so their target becomes a
-//! vertex count, `R·V` for a ratio and `N·V/F` for a face count (a closed surface has about
-//! two faces per vertex, so the face count lands near the target).
+//! vertex count ([`Target::vertex_count`]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -12,9 +11,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation, vertex_normals};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
-use meshgnn_models::mesh_simplifier::{NEURAL_MESH_SIMPLIFIER_NAME, NeuralMeshSimplifier};
+use meshgnn_models::mesh_simplifier::NeuralMeshSimplifier;
 use meshgnn_models::point_selection::{SelectionInput, SelectionMethod, SelectionModel, select};
-use meshgnn_models::pretrained;
 use serde_json::{Value, json};
 
 /// Simplification methods.
@@ -109,13 +107,15 @@ impl Simplifier {
                         meshgnn_geometry::MAX_FILLED_HOLE_EDGES
                     );
                 }
-                let model = match options.weights {
-                    Some(path) => NeuralMeshSimplifier::load(path).with_context(|| {
-                        format!("loading the neural simplifier weights {}", path.display())
-                    })?,
-                    None => pretrained::load(NEURAL_MESH_SIMPLIFIER_NAME)
-                        .context("loading the bundled neural simplifier weights")?,
-                };
+                let model =
+                    NeuralMeshSimplifier::load_or_bundled(options.weights).with_context(|| {
+                        match options.weights {
+                            Some(path) => {
+                                format!("loading the neural simplifier weights {}", path.display())
+                            }
+                            None => "loading the bundled neural simplifier weights".into(),
+                        }
+                    })?;
                 Ok(Self::Neural {
                     model: Box::new(model),
                     target,
@@ -192,15 +192,7 @@ impl Simplifier {
                 seed,
                 fill_holes,
             } => {
-                if mesh.face_count() < MIN_NEURAL_FACES {
-                    bail!(
-                        "{} faces: the neural simplifier needs at least {MIN_NEURAL_FACES} (its \
-                         training meshes have thousands); use --method qem",
-                        mesh.face_count()
-                    );
-                }
-                let kept = target_vertices(target, mesh);
-                let result = model.simplify(mesh, kept, *seed, *fill_holes)?;
+                let result = model.simplify_to(mesh, target, *seed, *fill_holes)?;
                 progress(1.0);
                 let watertightness = Watertightness {
                     wa_raw: result.wa_raw,
@@ -220,7 +212,7 @@ impl Simplifier {
                     normals: Some(&normals),
                     mesh: Some(mesh),
                 };
-                let kept = target_vertices(target, mesh);
+                let kept = target.vertex_count(mesh);
                 let selection = select(SelectionMethod::Neural, &input, kept, *seed, Some(model))?;
                 progress(0.5);
                 let kept_normals: Vec<[f32; 3]> = selection
@@ -239,20 +231,6 @@ impl Simplifier {
             }
         }
     }
-}
-
-/// The fewest faces the neural method accepts: below it the sampled vertices are too few for
-/// the candidate triangles it learnt on (a 12-face cube at half its vertices kept one face).
-pub const MIN_NEURAL_FACES: usize = 100;
-
-/// The vertex count a selecting method keeps for `target` (module docs), at least 3.
-fn target_vertices(target: &Target, mesh: &TriMesh) -> usize {
-    let v = mesh.vertex_count() as f64;
-    let kept = match *target {
-        Target::Ratio(r) => r * v,
-        Target::Faces(n) => n as f64 * v / mesh.face_count().max(1) as f64,
-    };
-    (kept.round() as usize).clamp(3, mesh.vertex_count().max(3))
 }
 
 /// Fails unless `target` keeps between 1 and all of the input's `faces`.

@@ -18,82 +18,7 @@
 
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
-use crate::{Error, Result};
-
-/// Bits per axis of the curve's grid.
-const CURVE_BITS: u32 = 16;
-
-/// The index along a 3D Hilbert curve of the grid cell `cell` (each `< 2^CURVE_BITS`):
-/// Skilling's transpose algorithm ("Programming the Hilbert curve", AIP Conf. Proc. 707, 2004),
-/// then the transposed bits interleaved.
-fn hilbert_index(mut x: [u32; 3]) -> u64 {
-    let top = 1u32 << (CURVE_BITS - 1);
-    // Inverse undo of the excess work.
-    let mut q = top;
-    while q > 1 {
-        let p = q - 1;
-        for i in 0..3 {
-            if x[i] & q != 0 {
-                x[0] ^= p;
-            } else {
-                let t = (x[0] ^ x[i]) & p;
-                x[0] ^= t;
-                x[i] ^= t;
-            }
-        }
-        q >>= 1;
-    }
-    // Gray encode.
-    for i in 1..3 {
-        x[i] ^= x[i - 1];
-    }
-    let mut t = 0;
-    let mut q = top;
-    while q > 1 {
-        if x[2] & q != 0 {
-            t ^= q - 1;
-        }
-        q >>= 1;
-    }
-    for v in &mut x {
-        *v ^= t;
-    }
-    let mut index = 0u64;
-    for bit in (0..CURVE_BITS).rev() {
-        for v in x {
-            index = (index << 1) | u64::from((v >> bit) & 1);
-        }
-    }
-    index
-}
-
-/// The points' order along the Hilbert curve over their bounding box (ties by index).
-fn curve_order(points: &[[f32; 3]]) -> Vec<u32> {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in points {
-        for c in 0..3 {
-            lo[c] = lo[c].min(p[c]);
-            hi[c] = hi[c].max(p[c]);
-        }
-    }
-    let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0f32, f32::max);
-    let scale = if extent > 0.0 {
-        f64::from((1u32 << CURVE_BITS) - 1) / f64::from(extent)
-    } else {
-        0.0
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let cell = [0, 1, 2].map(|c| (f64::from(p[c] - lo[c]) * scale) as u32);
-            (hilbert_index(cell), i as u32)
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
-}
+use crate::{Error, Result, hilbert_order};
 
 /// `k` distinct indices of `points` drawn by `weights` (module docs), seeded.
 ///
@@ -146,7 +71,7 @@ pub fn balanced_sampling(
     if k == 0 {
         return Ok(Vec::new());
     }
-    let order = curve_order(points);
+    let order = hilbert_order(points);
     let total: f64 = order.iter().map(|&i| f64::from(weights[i as usize])).sum();
     let mut taken = vec![false; n];
     let mut picked = Vec::with_capacity(k);
@@ -191,27 +116,6 @@ pub fn balanced_sampling(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn hilbert_neighbours_are_grid_neighbours() {
-        // On a 4×4×4 corner of the grid the curve visits every cell once, each step to an
-        // adjacent cell.
-        let mut cells: Vec<(u64, [u32; 3])> = Vec::new();
-        for x in 0..4 {
-            for y in 0..4 {
-                for z in 0..4 {
-                    cells.push((hilbert_index([x, y, z]), [x, y, z]));
-                }
-            }
-        }
-        cells.sort_unstable();
-        assert_eq!(cells[0].0, 0);
-        for w in cells.windows(2) {
-            assert_eq!(w[1].0, w[0].0 + 1);
-            let d: u32 = (0..3).map(|c| w[0].1[c].abs_diff(w[1].1[c])).sum();
-            assert_eq!(d, 1, "{:?} -> {:?}", w[0], w[1]);
-        }
-    }
 
     #[test]
     fn inclusion_follows_the_weights() {

@@ -19,6 +19,7 @@ mod centroidal_relaxation;
 mod csr_matrix;
 mod farthest_point_sampling;
 mod fast_farthest_point_sampling;
+mod hilbert_order;
 mod k_ring;
 mod knn_graph;
 mod mesh_adjacency;
@@ -47,6 +48,7 @@ pub use fast_farthest_point_sampling::{
     fast_farthest_point_sampling, fast_farthest_point_sampling_batch,
     fast_farthest_point_sampling_indexed, fast_farthest_point_sampling_with_owners,
 };
+pub use hilbert_order::hilbert_order;
 pub use k_ring::{k_disk, k_rings};
 pub use knn_graph::{Neighbours, knn_graph, knn_query};
 pub use mesh_adjacency::{adjacency_from_edges, vertex_adjacency, vertex_face_incidence};

@@ -13,7 +13,7 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::EVALUATION_CURVATURE_NEIGHBOURS;
 
-use crate::mesh_simplifier::{NEURAL_MESH_SIMPLIFIER_NAME, NeuralMeshSimplifier};
+use crate::mesh_simplifier::NeuralMeshSimplifier;
 use crate::point_simplifier::{POINT_SIMPLIFIER_NAME, PointSimplifier, SimplifyOptions};
 use crate::{Error, Result, pretrained};
 
@@ -102,10 +102,9 @@ impl SelectionModel {
                 Some(path) => PointSimplifier::load(path)?,
                 None => pretrained::load(POINT_SIMPLIFIER_NAME)?,
             })),
-            SelectionMethod::Sampler => Some(Self::MeshSimplifier(match weights {
-                Some(path) => NeuralMeshSimplifier::load(path)?,
-                None => pretrained::load(NEURAL_MESH_SIMPLIFIER_NAME)?,
-            })),
+            SelectionMethod::Sampler => Some(Self::MeshSimplifier(
+                NeuralMeshSimplifier::load_or_bundled(weights)?,
+            )),
             _ => None,
         })
     }

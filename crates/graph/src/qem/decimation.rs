@@ -95,6 +95,20 @@ impl Default for Target {
     }
 }
 
+impl Target {
+    /// The vertex count a simplifier that selects vertices keeps of `mesh` for this target,
+    /// at least 3: `R·V` for a ratio, `N·V/F` for a face count (a closed surface has about
+    /// two faces per vertex, so the face count lands near the target).
+    pub fn vertex_count(&self, mesh: &TriMesh) -> usize {
+        let v = mesh.vertex_count() as f64;
+        let kept = match *self {
+            Self::Ratio(r) => r * v,
+            Self::Faces(n) => n as f64 * v / mesh.face_count().max(1) as f64,
+        };
+        (kept.round() as usize).clamp(3, mesh.vertex_count().max(3))
+    }
+}
+
 /// Options of [`decimate`]; update with `..Default::default()`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DecimationOptions {

@@ -11,7 +11,7 @@ use serde_json::{Map, Value};
 
 use super::{NeuralMeshSimplifier, NeuralMeshSimplifierConfig};
 use crate::checkpoint::{checkpoint_of, read_file};
-use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result};
+use crate::{Checkpoint, CheckpointHeader, Error, LoadCheckpoint, Result, pretrained};
 
 /// The model's name in checkpoints.
 pub const NEURAL_MESH_SIMPLIFIER_NAME: &str = "neural_mesh_simplifier";
@@ -88,6 +88,14 @@ impl NeuralMeshSimplifier {
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         Self::from_checkpoint_bytes(&read_file(path)?, path)
+    }
+
+    /// The checkpoint at `weights`, or the bundled weights without one.
+    pub fn load_or_bundled(weights: Option<&Path>) -> Result<Self> {
+        match weights {
+            Some(path) => Self::load(path),
+            None => pretrained::load(NEURAL_MESH_SIMPLIFIER_NAME),
+        }
     }
 }
 

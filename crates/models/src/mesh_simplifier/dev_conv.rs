@@ -8,15 +8,11 @@
 //! constant that `W_φ`'s bias already absorbs. Because only differences enter, the layer is
 //! invariant to a translation of its input (tested).
 
-use candle_core::{D, Tensor};
+use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::NeighbourSlots;
+use super::{NeighbourSlots, neighbour_minimum};
 use crate::{Error, Result};
-
-/// The projection an empty neighbour slot reads ([`NeighbourSlots`]): far above any real one,
-/// and finite in `f32` after a subtraction.
-const EMPTY_SLOT_VALUE: f32 = 1e30;
 
 /// Widths of a DevConv layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,17 +73,10 @@ impl DevConv {
                 reason: format!("{n} rows for a graph over {} points", slots.len()),
             });
         }
-        // W_θ(x_i − x_j) = W_θ x_i − W_θ x_j: project once, then gather the projections.
+        // max_j W_θ(x_i − x_j) = W_θ x_i − min_j W_θ x_j: project once, then take the
+        // neighbours' minimum in place.
         let projected = self.theta.forward(features)?;
-        let channels = projected.dim(1)?;
-        // Empty slots read a row so large that `x_i − x_empty` is never the maximum.
-        let empty = Tensor::full(EMPTY_SLOT_VALUE, (1, channels), features.device())?
-            .to_dtype(projected.dtype())?;
-        let neighbours = Tensor::cat(&[&projected, &empty], 0)?
-            .index_select(slots.indices(), 0)?
-            .reshape((n, slots.width(), channels))?;
-        let deviation = projected.unsqueeze(1)?.broadcast_sub(&neighbours)?;
-        let largest = deviation.max(D::Minus2)?;
+        let largest = (&projected - neighbour_minimum(&projected, slots.indices())?)?;
         Ok(self.phi.forward(&largest)?.relu()?)
     }
 }

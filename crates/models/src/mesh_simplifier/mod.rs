@@ -16,6 +16,7 @@ mod edge_predictor;
 mod extended_graph;
 mod face_classifier;
 mod face_graph;
+mod neighbour_minimum;
 mod neighbour_slots;
 mod neural_mesh_simplifier;
 mod point_sampler;
@@ -31,9 +32,10 @@ pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePred
 pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
 pub use face_graph::FaceGraph;
+pub use neighbour_minimum::neighbour_minimum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
-    FACE_THRESHOLD, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
+    FACE_THRESHOLD, MIN_NEURAL_FACES, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
     NeuralSimplification, SAMPLER_CLOUD_NEIGHBOURS, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};

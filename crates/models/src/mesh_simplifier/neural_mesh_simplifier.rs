@@ -19,7 +19,9 @@ use meshgnn_geometry::{
     TriMesh, boundary_loops, close_cracks, fill_holes, select_manifold_faces,
     unit_sphere_normalization, vertex_normals,
 };
-use meshgnn_graph::{CsrMatrix, knn_graph, vertex_adjacency};
+use meshgnn_graph::{
+    CsrMatrix, Target, balanced_sampling, hilbert_order, knn_graph, vertex_adjacency,
+};
 use meshgnn_losses::metrics::watertightness;
 
 use super::{
@@ -32,6 +34,11 @@ use crate::{Error, Result};
 /// Neighbours of a point in a cloud for the point sampler alone: a mesh vertex has six on
 /// average, and the sampler's DevConv learnt on mesh one-rings.
 pub const SAMPLER_CLOUD_NEIGHBOURS: usize = 6;
+
+/// The fewest faces [`NeuralMeshSimplifier::simplify_to`] accepts: below it the sampled
+/// vertices are too few for the candidate triangles it learnt on (a 12-face cube at half its
+/// vertices kept one face).
+pub const MIN_NEURAL_FACES: usize = 100;
 
 /// Face probability above which a candidate is kept (ch. 6.4).
 pub const FACE_THRESHOLD: f32 = 0.5;
@@ -209,6 +216,11 @@ impl NeuralMeshSimplifier {
     /// drawn by the learnt inclusion probabilities with the balanced draw, seeded; DevConv
     /// runs over `adjacency` (a mesh's vertex adjacency) or, for a cloud, the
     /// [`SAMPLER_CLOUD_NEIGHBOURS`]-NN graph.
+    ///
+    /// The network sees the points laid out along a Hilbert curve, so that the neighbour rows
+    /// each DevConv layer reads sit near each other in memory (a cloud in random order
+    /// scatters them: 1M points, 2× the time); the probabilities return to the input's order
+    /// before the draw, so the result does not depend on the layout.
     pub fn sample_points(
         &self,
         points: &[[f32; 3]],
@@ -216,12 +228,21 @@ impl NeuralMeshSimplifier {
         target: usize,
         seed: u64,
     ) -> Result<Vec<u32>> {
+        if !(1..=points.len()).contains(&target) {
+            return Err(Error::Invalid {
+                what: "target count".into(),
+                reason: format!(
+                    "must be in 1..={0} for {0} points, got {target}",
+                    points.len()
+                ),
+            });
+        }
         let positions = unit_sphere_normalization(points)?.apply(points);
-        let slots = match adjacency {
-            Some(adjacency) => NeighbourSlots::from_adjacency(adjacency, &self.device)?,
+        let rows: Vec<Vec<u32>> = match adjacency {
+            Some(adjacency) => adjacency.off_diagonal_rows()?,
             None => {
                 let k = SAMPLER_CLOUD_NEIGHBOURS.min(points.len().saturating_sub(1));
-                let rows: Vec<Vec<u32>> = if k == 0 {
+                if k == 0 {
                     vec![Vec::new(); points.len()]
                 } else {
                     knn_graph(&positions, k)?
@@ -229,16 +250,48 @@ impl NeuralMeshSimplifier {
                         .chunks(k)
                         .map(<[u32]>::to_vec)
                         .collect()
-                };
-                NeighbourSlots::from_rows(&rows, &self.device)?
+                }
             }
         };
-        let tensor =
-            Tensor::from_slice(positions.as_flattened(), (positions.len(), 3), &self.device)?;
-        Ok(self
-            .sampler
-            .sample(&tensor, &positions, &slots, target, seed)?
-            .indices)
+        let order = hilbert_order(&positions);
+        let mut rank = vec![0u32; order.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rank[i as usize] = r as u32;
+        }
+        let laid_out_rows: Vec<Vec<u32>> = order
+            .iter()
+            .map(|&i| rows[i as usize].iter().map(|&j| rank[j as usize]).collect())
+            .collect();
+        let laid_out: Vec<f32> = order.iter().flat_map(|&i| positions[i as usize]).collect();
+        let slots = NeighbourSlots::from_rows(&laid_out_rows, &self.device)?;
+        let tensor = Tensor::from_vec(laid_out, (positions.len(), 3), &self.device)?;
+        let laid_out_probabilities: Vec<f32> = self.sampler.forward(&tensor, &slots)?.to_vec1()?;
+        let mut probabilities = vec![0f32; order.len()];
+        for (&i, &p) in order.iter().zip(&laid_out_probabilities) {
+            probabilities[i as usize] = p;
+        }
+        Ok(balanced_sampling(&positions, &probabilities, target, seed)?)
+    }
+
+    /// [`Self::simplify`] aiming at a face count or ratio ([`Target::vertex_count`] vertices):
+    /// what the apps call. Refuses a mesh of fewer than [`MIN_NEURAL_FACES`] faces.
+    pub fn simplify_to(
+        &self,
+        mesh: &TriMesh,
+        target: &Target,
+        seed: u64,
+        fill_holes_up_to: Option<usize>,
+    ) -> Result<NeuralSimplification> {
+        if mesh.face_count() < MIN_NEURAL_FACES {
+            return Err(Error::Invalid {
+                what: format!("{} faces", mesh.face_count()),
+                reason: format!(
+                    "the neural simplifier needs at least {MIN_NEURAL_FACES} (its training \
+                     meshes have thousands); use the qem method"
+                ),
+            });
+        }
+        self.simplify(mesh, target.vertex_count(mesh), seed, fill_holes_up_to)
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
