@@ -145,44 +145,54 @@ impl ExtendedGraph {
                     .collect()
             })
             .collect();
+        // Column a of Ŝ: the (vertex i, flat attention entry) pairs whose row holds sampled
+        // vertex a, i increasing.
+        let mut columns: Vec<Vec<(u32, u32)>> = vec![Vec::new(); sampled.len()];
+        for (i, left) in s_hat.iter().enumerate() {
+            for &(p, a) in left {
+                columns[a as usize].push((i as u32, p));
+            }
+        }
         // Terms of A_s[a, b] = Σ_i Σ_{j ∈ row i} Ŝ[i, a] Ŝ[j, b] (the row of i holds i itself),
-        // each packed as `a, b, p, q` in the four 32-bit words of a u128 (high to low): one
-        // integer sort orders them by pair, several times faster than sorting tuples.
-        let mut terms: Vec<u128> = attention_rows
+        // generated per a and ordered by (b, p, q) within it (each packed into the three low
+        // 32-bit words of a u128), so that no global sort is needed: the order is (a, b, p, q).
+        let per_sample: Vec<Vec<u128>> = columns
             .par_iter()
-            .zip(&s_hat)
-            .flat_map_iter(|(row, left)| {
+            .enumerate()
+            .map(|(a, column)| {
+                let linked = &links[a];
                 let mut out = Vec::new();
-                for &(p, a) in left {
-                    let linked = &links[a as usize];
-                    for &j in row {
+                for &(i, p) in column {
+                    for &j in &attention_rows[i as usize] {
                         for &(q, b) in &s_hat[j as usize] {
                             if linked.binary_search(&b).is_ok() {
-                                let words = [a, b, p, q].map(u128::from);
-                                out.push(
-                                    words[0] << 96 | words[1] << 64 | words[2] << 32 | words[3],
-                                );
+                                let words = [b, p, q].map(u128::from);
+                                out.push(words[0] << 64 | words[1] << 32 | words[2]);
                             }
                         }
                     }
                 }
+                out.sort_unstable();
                 out
             })
             .collect();
-        terms.par_sort_unstable();
-        let word = |t: u128, k: u32| (t >> (32 * (3 - k))) as u32;
+        let word = |t: u128, k: u32| (t >> (32 * (2 - k))) as u32;
         let mut pairs: Vec<[u32; 2]> = Vec::new();
-        let mut term_pair = Vec::with_capacity(terms.len());
-        for &t in &terms {
-            let pair = [word(t, 0), word(t, 1)];
-            if pairs.last() != Some(&pair) {
-                pairs.push(pair);
+        let mut term_pair = Vec::new();
+        let mut term_left = Vec::new();
+        let mut term_right = Vec::new();
+        for (a, terms) in per_sample.iter().enumerate() {
+            for &t in terms {
+                let pair = [a as u32, word(t, 0)];
+                if pairs.last() != Some(&pair) {
+                    pairs.push(pair);
+                }
+                term_pair.push((pairs.len() - 1) as u32);
+                term_left.push(word(t, 1));
+                term_right.push(word(t, 2));
             }
-            term_pair.push((pairs.len() - 1) as u32);
         }
-        let count = terms.len();
-        let term_left: Vec<u32> = terms.iter().map(|&t| word(t, 2)).collect();
-        let term_right: Vec<u32> = terms.iter().map(|&t| word(t, 3)).collect();
+        let count = term_pair.len();
         Ok(Self {
             conv_slots,
             attention_mask: Tensor::from_vec(mask, (n, width), device)?,

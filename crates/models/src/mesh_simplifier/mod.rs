@@ -16,6 +16,7 @@ mod edge_predictor;
 mod extended_graph;
 mod face_classifier;
 mod face_graph;
+mod link_message_mean;
 mod neighbour_minimum;
 mod neighbour_slots;
 mod neural_mesh_simplifier;
@@ -32,6 +33,7 @@ pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePred
 pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
 pub use face_graph::FaceGraph;
+pub use link_message_mean::link_message_mean;
 pub use neighbour_minimum::neighbour_minimum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{

@@ -9,17 +9,11 @@
 //! sigmoid read-out was saturated at exactly 0 or 1 in `f32` on an icosphere (measured),
 //! leaving no gradient to learn from.
 
-use candle_core::{D, Tensor};
+use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::FaceGraph;
+use super::{FaceGraph, link_message_mean};
 use crate::{Error, Result};
-
-/// Triangles per block of links: the `(block, k, C_out)` intermediates stay near 10 MB at
-/// k = 20 and 128 channels, so the allocator reuses them; one `(F, k, C_out)` tensor is
-/// 1.1 GB at 100k candidates, and faulting in fresh pages for each of them took most of the
-/// time of a 20 % simplification of an 89k-face mesh.
-const BLOCK: usize = 1024;
 
 /// Widths of a TriConv layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,35 +66,22 @@ impl TriConv {
             )?);
         }
         // The first layer on `[r ‖ f_n − f_k]` is `W_r r + W_f f_n − W_f f_k + b`: `W_f f` once
-        // per triangle, not per link. The second layer is affine, so it commutes with the
-        // mean over the links and runs once per triangle too. Equal to the printed order of
-        // operations up to rounding, about twenty times fewer multiplications at k = 20.
+        // per triangle, not per link; the rest per link in one fused pass. The second layer
+        // is affine, so it commutes with the mean over the links and runs once per triangle
+        // too. Equal to the printed order of operations up to rounding, about twenty times
+        // fewer multiplications at k = 20.
         let first = &self.mlp[0];
         let weight = first.weight();
         let relative_weight = weight.narrow(1, 0, 9)?.t()?;
         let feature_weight = weight.narrow(1, 9, weight.dim(1)? - 9)?;
         let projected = features.matmul(&feature_weight.t()?)?;
+        let bias = match first.bias() {
+            Some(bias) => bias.unsqueeze(0)?,
+            None => Tensor::zeros((1, output), weight.dtype(), weight.device())?,
+        };
+        let stacked = Tensor::cat(&[&relative_weight, &bias], 0)?;
         let relative = graph.relative.to_dtype(features.dtype())?;
-        let mut means = Vec::with_capacity(f.div_ceil(BLOCK));
-        for start in (0..f).step_by(BLOCK) {
-            let rows = BLOCK.min(f - start);
-            let links = graph.neighbours.narrow(0, start * k, rows * k)?;
-            let mut hidden = relative
-                .narrow(0, start * k, rows * k)?
-                .matmul(&relative_weight)?
-                .reshape((rows, k, output))?
-                .broadcast_add(&projected.narrow(0, start, rows)?.unsqueeze(1)?)?
-                .sub(
-                    &projected
-                        .index_select(&links, 0)?
-                        .reshape((rows, k, output))?,
-                )?;
-            if let Some(bias) = first.bias() {
-                hidden = hidden.broadcast_add(bias)?;
-            }
-            means.push(hidden.relu()?.mean(D::Minus2)?);
-        }
-        let mean = Tensor::cat(&means, 0)?;
+        let mean = link_message_mean(&relative, &stacked, &projected, &graph.neighbours)?;
         Ok(self.mlp[1].forward(&mean)?)
     }
 }
