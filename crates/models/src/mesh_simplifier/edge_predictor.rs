@@ -11,7 +11,7 @@
 use candle_core::{D, Tensor};
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::{DevConv, DevConvConfig, ExtendedGraph};
+use super::{DevConv, DevConvConfig, ExtendedGraph, slot_dot_products};
 use crate::{Error, Result};
 
 /// Hyper-parameters; defaults are the thesis' (ch. 6.4).
@@ -97,16 +97,9 @@ impl EdgePredictor {
         let features = self.conv.forward(positions, &graph.conv_slots)?;
         let query = self.query.forward(&features)?;
         let key = self.key.forward(&features)?;
-        let h = query.dim(1)?;
-        // Empty slots (index N) read a zero row; their logits are masked below.
-        let padded = Tensor::cat(&[&query, &query.zeros_like()?.narrow(0, 0, 1)?], 0)?;
-        let gathered = padded
-            .index_select(slots.indices(), 0)?
-            .reshape((n, slots.width(), h))?;
-        let logits = gathered
-            .broadcast_mul(&key.unsqueeze(1)?)?
-            .sum(D::Minus1)?
-            .add(&graph.attention_mask.to_dtype(gathered.dtype())?)?;
+        // Empty slots (index N) give 0; their logits are masked here.
+        let logits = slot_dot_products(&query, &key, slots.indices())?
+            .add(&graph.attention_mask.to_dtype(query.dtype())?)?;
         // `softmax`, not `softmax_last_dim`: the fused kernel has no backward pass.
         let attention = candle_nn::ops::softmax(&logits, D::Minus1)?;
         let adjacency = graph.simplified_adjacency(&attention)?;

@@ -14,6 +14,8 @@
 use candle_core::{CpuStorage, CustomOp3, DType, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
+use super::incoming_links::IncomingLinks;
+
 /// Relative-position channels of a link (eq. 6.6).
 const RELATIVE: usize = 9;
 
@@ -315,21 +317,8 @@ fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
             *total += part;
         }
     }
-    // Per linked triangle: `−p_l` through the links reversed (a counting sort, so each
-    // triangle's incoming links keep their order).
-    let mut starts = vec![0usize; f + 1];
-    for &l in links {
-        starts[l as usize + 1] += 1;
-    }
-    for i in 0..f {
-        starts[i + 1] += starts[i];
-    }
-    let mut incoming = vec![0u32; links.len()];
-    let mut next = starts.clone();
-    for (link, &l) in links.iter().enumerate() {
-        incoming[next[l as usize]] = link as u32;
-        next[l as usize] += 1;
-    }
+    // Per linked triangle: `−p_l` through the links reversed.
+    let incoming = IncomingLinks::new(links, f);
     projected_grad
         .par_chunks_mut(ROWS_PER_TASK * c)
         .enumerate()
@@ -337,7 +326,7 @@ fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
             let mut hidden = vec![0.0; c];
             for (offset, row) in rows.chunks_mut(c).enumerate() {
                 let j = task * ROWS_PER_TASK + offset;
-                for &link in &incoming[starts[j]..starts[j + 1]] {
+                for &link in incoming.of(j) {
                     let link = link as usize;
                     link_grad(link / k, link % k, &mut hidden);
                     for (o, &h) in row.iter_mut().zip(&hidden) {

@@ -16,6 +16,7 @@ mod edge_predictor;
 mod extended_graph;
 mod face_classifier;
 mod face_graph;
+mod incoming_links;
 mod link_message_mean;
 mod neighbour_minimum;
 mod neighbour_slots;
@@ -23,6 +24,7 @@ mod neural_mesh_simplifier;
 mod point_sampler;
 mod simplification_loss;
 mod simplifier_training;
+mod slot_dot_products;
 mod tri_conv;
 
 pub use candidate_features::{CANDIDATE_FEATURES, candidate_features};
@@ -47,4 +49,5 @@ pub use simplification_loss::{
 pub use simplifier_training::{
     SimplifierExample, SimplifierLosses, SimplifierTraining, VALIDATION_RATIOS, qem_importance,
 };
+pub use slot_dot_products::slot_dot_products;
 pub use tri_conv::{TriConv, TriConvConfig};
