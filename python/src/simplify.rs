@@ -94,6 +94,7 @@ pub fn simplify<'py>(
                     &target,
                     seed,
                     fill_holes,
+                    &mut |_| {},
                 )
             })
             .map_err(|e| value_error("simplify", e))?;

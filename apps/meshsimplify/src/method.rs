@@ -192,8 +192,7 @@ impl Simplifier {
                 seed,
                 fill_holes,
             } => {
-                let result = model.simplify_to(mesh, target, *seed, *fill_holes)?;
-                progress(1.0);
+                let result = model.simplify_to(mesh, target, *seed, *fill_holes, progress)?;
                 let watertightness = Watertightness {
                     wa_raw: result.wa_raw,
                     wa: result.wa,

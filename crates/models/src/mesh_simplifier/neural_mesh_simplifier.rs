@@ -173,9 +173,22 @@ impl NeuralMeshSimplifier {
     /// Eq. 6.1-6.7: samples `target` vertices of `input` (seeded) and scores the candidate
     /// triangles among them.
     pub fn forward(&self, input: &MeshInput, target: usize, seed: u64) -> Result<SimplifierPass> {
+        self.forward_with_progress(input, target, seed, &mut |_| {})
+    }
+
+    /// [`Self::forward`] calling `progress(fraction in [0, 1])` after each stage, weighted by
+    /// its share of a large mesh's time (the face classifier takes more than half).
+    pub fn forward_with_progress(
+        &self,
+        input: &MeshInput,
+        target: usize,
+        seed: u64,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<SimplifierPass> {
         let sampled =
             self.sampler
                 .sample(&input.tensor, &input.positions, &input.slots, target, seed)?;
+        progress(0.05);
         let graph = ExtendedGraph::new(
             &input.positions,
             &input.adjacency,
@@ -183,8 +196,10 @@ impl NeuralMeshSimplifier {
             self.config.edges.neighbours,
             &self.device,
         )?;
+        progress(0.2);
         let prediction = self.edges.forward(&input.tensor, &graph)?;
         let candidates = prediction.candidate_faces(&graph)?;
+        progress(0.3);
         let corners: Vec<[f32; 3]> = sampled
             .indices
             .iter()
@@ -202,7 +217,9 @@ impl NeuralMeshSimplifier {
             self.config.faces.neighbours,
             &self.device,
         )?;
+        progress(0.37);
         let face_probabilities = self.faces.forward(&candidates.prior, &face_graph)?;
+        progress(0.95);
         Ok(SimplifierPass {
             sampled,
             graph,
@@ -275,12 +292,14 @@ impl NeuralMeshSimplifier {
 
     /// [`Self::simplify`] aiming at a face count or ratio ([`Target::vertex_count`] vertices):
     /// what the apps call. Refuses a mesh of fewer than [`MIN_NEURAL_FACES`] faces.
+    /// `progress(fraction in [0, 1])` follows the stages.
     pub fn simplify_to(
         &self,
         mesh: &TriMesh,
         target: &Target,
         seed: u64,
         fill_holes_up_to: Option<usize>,
+        progress: &mut dyn FnMut(f64),
     ) -> Result<NeuralSimplification> {
         if mesh.face_count() < MIN_NEURAL_FACES {
             return Err(Error::Invalid {
@@ -291,7 +310,13 @@ impl NeuralMeshSimplifier {
                 ),
             });
         }
-        self.simplify(mesh, target.vertex_count(mesh), seed, fill_holes_up_to)
+        self.simplify_with_progress(
+            mesh,
+            target.vertex_count(mesh),
+            seed,
+            fill_holes_up_to,
+            progress,
+        )
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
@@ -306,6 +331,18 @@ impl NeuralMeshSimplifier {
         seed: u64,
         fill_holes_up_to: Option<usize>,
     ) -> Result<NeuralSimplification> {
+        self.simplify_with_progress(mesh, target, seed, fill_holes_up_to, &mut |_| {})
+    }
+
+    /// [`Self::simplify`] calling `progress(fraction in [0, 1])` after each stage.
+    pub fn simplify_with_progress(
+        &self,
+        mesh: &TriMesh,
+        target: usize,
+        seed: u64,
+        fill_holes_up_to: Option<usize>,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<NeuralSimplification> {
         let n = mesh.vertex_count();
         if !(3..=n).contains(&target) {
             return Err(Error::Invalid {
@@ -314,7 +351,7 @@ impl NeuralMeshSimplifier {
             });
         }
         let input = MeshInput::new(mesh, &self.device)?;
-        let pass = self.forward(&input, target, seed)?;
+        let pass = self.forward_with_progress(&input, target, seed, progress)?;
         let probabilities: Vec<f32> = pass.face_probabilities.detach().to_vec1()?;
         let vertex_map = pass.sampled.indices.clone();
         let vertices: Vec<[f32; 3]> = vertex_map
@@ -349,6 +386,7 @@ impl NeuralMeshSimplifier {
                 fill_holes(&TriMesh::new(vertices, closed)?, max_edges)?
             }
         };
+        progress(1.0);
         Ok(NeuralSimplification {
             wa: watertightness(&mesh),
             holes: boundary_loops(&mesh).len(),
