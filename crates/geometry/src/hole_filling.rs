@@ -5,10 +5,12 @@
 //!
 //! The new faces run every loop edge against its face, so an oriented mesh stays oriented; a
 //! diagonal that is already an edge of the mesh (or of a hole filled before) is never used, so
-//! an edge-manifold mesh stays edge-manifold. A loop that passes a vertex twice, a chain that
-//! does not close, or a loop with no triangulation under those rules is left open.
+//! an edge-manifold mesh stays edge-manifold. A loop that passes a vertex twice (two holes
+//! meeting at a vertex) is split there into simple loops, each filled on its own. A chain
+//! that does not close, or a loop with no triangulation under those rules (every diagonal
+//! already an edge, as across a fold), is left open.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 use crate::edge_topology::edge_topology;
 use crate::error::{Error, Result};
@@ -56,11 +58,11 @@ pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
         })
         .collect();
     let mut faces = mesh.triangles().to_vec();
-    for hole in boundary_loops_in(&topology) {
+    let loops = boundary_loops_in(&topology);
+    for hole in loops.iter().flat_map(|hole| simple_loops(hole)) {
         let k = hole.len();
-        let distinct: HashSet<u32> = hole.iter().copied().collect();
         let closes = (0..k).all(|i| boundary.contains(&key(hole[i], hole[(i + 1) % k])));
-        if !(3..=max_edges).contains(&k) || distinct.len() != k || !closes {
+        if !(3..=max_edges).contains(&k) || !closes {
             continue;
         }
         if let Some(patch) = least_area_triangulation(mesh.vertices(), &hole, &edges) {
@@ -71,6 +73,28 @@ pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
         }
     }
     TriMesh::new(mesh.vertices().to_vec(), faces)
+}
+
+/// The closed walk `hole` cut into simple loops at every vertex it passes twice, each in the
+/// walk's direction: `a b c a d e` becomes `a b c` and `a d e`.
+fn simple_loops(hole: &[u32]) -> Vec<Vec<u32>> {
+    let mut loops = Vec::new();
+    let mut walk: Vec<u32> = Vec::with_capacity(hole.len());
+    let mut position: HashMap<u32, usize> = HashMap::new();
+    for &v in hole {
+        if let Some(&p) = position.get(&v) {
+            // The walk came back to v: what it went round since is a loop.
+            let cycle = walk.split_off(p);
+            for u in &cycle {
+                position.remove(u);
+            }
+            loops.push(cycle);
+        }
+        position.insert(v, walk.len());
+        walk.push(v);
+    }
+    loops.push(walk);
+    loops
 }
 
 /// The triangulation of the closed polygon `hole` with the least total area whose diagonals
@@ -175,6 +199,49 @@ mod tests {
             assert_eq!(triangle_cross(closed.triangle_positions(f))[2].signum(), up);
         }
         assert!(is_edge_manifold(&closed));
+    }
+
+    #[test]
+    fn a_walk_through_a_vertex_twice_splits_into_simple_loops() {
+        assert_eq!(
+            simple_loops(&[0, 1, 2, 0, 3, 4]),
+            vec![vec![0, 1, 2], vec![0, 3, 4]]
+        );
+        assert_eq!(simple_loops(&[5, 6, 7]), vec![vec![5, 6, 7]]);
+        // Nested: 1 is passed twice inside the loop through 0.
+        assert_eq!(
+            simple_loops(&[0, 1, 2, 3, 1, 4, 5]),
+            vec![vec![1, 2, 3], vec![0, 1, 4, 5]]
+        );
+    }
+
+    #[test]
+    fn two_holes_meeting_at_a_vertex_are_both_filled() {
+        // A 4×4 grid: the two faces of cell (1, 2) and of cell (2, 1) off. The cells touch at
+        // one corner, so their boundaries form one walk through it.
+        let grid = grid_plane(4, 4);
+        // Cell (i, j) of the grid over the unit square, by the faces' barycentres.
+        let square = |i: f32, j: f32| -> Vec<usize> {
+            (0..grid.face_count())
+                .filter(|&f| {
+                    let c = grid.triangle_positions(f);
+                    let x = (c[0][0] + c[1][0] + c[2][0]) / 3.0;
+                    let y = (c[0][1] + c[1][1] + c[2][1]) / 3.0;
+                    (x * 4.0).floor() == i && (y * 4.0).floor() == j
+                })
+                .collect()
+        };
+        let mut drop = square(1.0, 2.0);
+        drop.extend(square(2.0, 1.0));
+        assert_eq!(drop.len(), 4);
+        let open = without(&grid, &drop);
+        assert_eq!(boundary_loops(&open).len(), 2);
+        // 8 edges: the two 4-edge holes, not the 16-edge rim.
+        let closed = fill_holes(&open, 8).unwrap();
+        assert_eq!(closed.face_count(), grid.face_count());
+        assert!(is_edge_manifold(&closed));
+        // Only the outer rim is left.
+        assert_eq!(boundary_loops(&closed).len(), 1);
     }
 
     #[test]
