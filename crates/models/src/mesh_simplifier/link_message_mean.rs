@@ -3,18 +3,22 @@
 //! of each link, `W` the first MLP layer's columns for it, `p = W_f f` the projected triangle
 //! features and `l(n, k)` the `k`-th link of triangle `n`. Computed with tensor operations,
 //! every link's `C`-channel hidden vector is materialised several times over (`F·K·C`: 100M
-//! values for 40k candidates at K = 20 and 128 channels); here each lives in registers for
-//! one link and only `F·C` values are written.
+//! values for 40k candidates at K = 20 and 128 channels); here each lives in one small buffer
+//! while its link is summed, and only `F·C` values are written.
 //!
 //! `weight` stacks `W` (9 rows) over `b` (one row), so that one operand carries both and their
 //! gradients. The backward pass recomputes the hidden vectors instead of keeping them: first
 //! per triangle (its own `p_n`, `W` and `b`), then per linked triangle through the reversed
 //! links (`−p_l`), so that each pass writes only rows it owns and runs in parallel.
 
-use candle_core::{CpuStorage, CustomOp3, DType, Layout, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 use super::incoming_links::IncomingLinks;
+use super::op_operands::{contiguous, host_f64};
+
+/// The name in error messages.
+const NAME: &str = "link message mean";
 
 /// Relative-position channels of a link (eq. 6.6).
 const RELATIVE: usize = 9;
@@ -62,7 +66,6 @@ trait Real:
     + std::ops::Mul<Output = Self>
     + std::ops::Div<Output = Self>
     + std::ops::AddAssign
-    + std::ops::SubAssign
 {
     const ZERO: Self;
     fn from_count(n: usize) -> Self;
@@ -116,7 +119,7 @@ fn forward<T: Real>(operands: &Operands<T>) -> Vec<T> {
     let sizes = operands.sizes;
     let Sizes { k, c, .. } = sizes;
     let mut out = vec![T::ZERO; sizes.f * c];
-    if c == 0 {
+    if c == 0 || k == 0 {
         return out;
     }
     let count = T::from_count(k);
@@ -138,13 +141,6 @@ fn forward<T: Real>(operands: &Operands<T>) -> Vec<T> {
             }
         });
     out
-}
-
-fn slice<'a, T>(values: &'a [T], layout: &Layout) -> candle_core::Result<&'a [T]> {
-    match layout.contiguous_offsets() {
-        Some((start, end)) => Ok(&values[start..end]),
-        None => candle_core::bail!("link message mean: operands must be contiguous"),
-    }
 }
 
 impl LinkMessageMean {
@@ -170,6 +166,15 @@ impl LinkMessageMean {
         }
         Ok(Sizes { f, k: links / f, c })
     }
+
+    /// The links on the host, each checked to name a triangle.
+    fn link_list(&self, sizes: Sizes) -> candle_core::Result<Vec<u32>> {
+        let links: Vec<u32> = self.links.to_vec1()?;
+        if let Some(bad) = links.iter().find(|&&l| l as usize >= sizes.f) {
+            candle_core::bail!("link message mean: link to {bad} of {} triangles", sizes.f);
+        }
+        Ok(links)
+    }
 }
 
 impl CustomOp3 for LinkMessageMean {
@@ -191,18 +196,18 @@ impl CustomOp3 for LinkMessageMean {
         let out = match (s1, s2, s3) {
             (CpuStorage::F32(r), CpuStorage::F32(w), CpuStorage::F32(p)) => {
                 CpuStorage::F32(forward(&Operands {
-                    relative: slice(r, l1)?,
-                    weight: slice(w, l2)?,
-                    projected: slice(p, l3)?,
+                    relative: contiguous(r, l1, NAME)?,
+                    weight: contiguous(w, l2, NAME)?,
+                    projected: contiguous(p, l3, NAME)?,
                     links: &links,
                     sizes,
                 }))
             }
             (CpuStorage::F64(r), CpuStorage::F64(w), CpuStorage::F64(p)) => {
                 CpuStorage::F64(forward(&Operands {
-                    relative: slice(r, l1)?,
-                    weight: slice(w, l2)?,
-                    projected: slice(p, l3)?,
+                    relative: contiguous(r, l1, NAME)?,
+                    weight: contiguous(w, l2, NAME)?,
+                    projected: contiguous(p, l3, NAME)?,
                     links: &links,
                     sizes,
                 }))
@@ -222,14 +227,11 @@ impl CustomOp3 for LinkMessageMean {
     ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>, Option<Tensor>)> {
         let sizes = self.sizes(relative.shape(), weight.shape(), projected.shape())?;
         let links = self.link_list(sizes)?;
-        let host = |t: &Tensor| -> candle_core::Result<Vec<f64>> {
-            t.to_dtype(DType::F64)?.flatten_all()?.to_vec1()
-        };
         let (r, w, p, g) = (
-            host(relative)?,
-            host(weight)?,
-            host(projected)?,
-            host(grad)?,
+            host_f64(relative)?,
+            host_f64(weight)?,
+            host_f64(projected)?,
+            host_f64(grad)?,
         );
         let operands = Operands {
             relative: &r,
@@ -247,17 +249,6 @@ impl CustomOp3 for LinkMessageMean {
             Some(weight_grad.to_dtype(weight.dtype())?),
             Some(projected_grad.to_dtype(projected.dtype())?),
         ))
-    }
-}
-
-impl LinkMessageMean {
-    /// The links on the host, each checked to name a triangle.
-    fn link_list(&self, sizes: Sizes) -> candle_core::Result<Vec<u32>> {
-        let links: Vec<u32> = self.links.to_vec1()?;
-        if let Some(bad) = links.iter().find(|&&l| l as usize >= sizes.f) {
-            candle_core::bail!("link message mean: link to {bad} of {} triangles", sizes.f);
-        }
-        Ok(links)
     }
 }
 
@@ -341,7 +332,7 @@ fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use candle_core::{D, Device};
+    use candle_core::{D, DType, Device};
     use meshgnn_losses::losses::gradient_disagreement;
 
     /// Four triangles with three links each, channels 5, in `f64`.

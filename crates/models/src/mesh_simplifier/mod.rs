@@ -21,6 +21,7 @@ mod link_message_mean;
 mod neighbour_minimum;
 mod neighbour_slots;
 mod neural_mesh_simplifier;
+mod op_operands;
 mod point_sampler;
 mod simplification_loss;
 mod simplifier_training;

@@ -10,8 +10,13 @@
 //! Empty slots ([`super::NeighbourSlots`]: index `N`) are skipped; a row without a real slot
 //! (which `NeighbourSlots` never builds) gives the point's own value.
 
-use candle_core::{CpuStorage, CustomOp2, DType, Layout, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
+
+use super::op_operands::{contiguous, host_f64};
+
+/// The name in error messages.
+const NAME: &str = "neighbour minimum";
 
 /// Rows per parallel task: large enough to amortise the scheduling, small enough to balance.
 const ROWS_PER_TASK: usize = 4096;
@@ -99,14 +104,6 @@ fn minimum<T: PartialOrd + Copy + Send + Sync>(
     out
 }
 
-/// The contiguous slice of a storage under `layout`.
-fn slice<'a, T>(values: &'a [T], layout: &Layout) -> candle_core::Result<&'a [T]> {
-    match layout.contiguous_offsets() {
-        Some((start, end)) => Ok(&values[start..end]),
-        None => candle_core::bail!("neighbour minimum: operands must be contiguous"),
-    }
-}
-
 impl CustomOp2 for NeighbourMinimum {
     fn name(&self) -> &'static str {
         "neighbour-minimum"
@@ -122,11 +119,11 @@ impl CustomOp2 for NeighbourMinimum {
         let CpuStorage::U32(slots) = s2 else {
             candle_core::bail!("neighbour minimum: slots must be u32");
         };
-        let slots = slice(slots, l2)?;
+        let slots = contiguous(slots, l2, NAME)?;
         let (_, c, w) = dimensions(l1.shape(), slots.len())?;
         let out = match s1 {
-            CpuStorage::F32(v) => CpuStorage::F32(minimum(slice(v, l1)?, slots, c, w)),
-            CpuStorage::F64(v) => CpuStorage::F64(minimum(slice(v, l1)?, slots, c, w)),
+            CpuStorage::F32(v) => CpuStorage::F32(minimum(contiguous(v, l1, NAME)?, slots, c, w)),
+            CpuStorage::F64(v) => CpuStorage::F64(minimum(contiguous(v, l1, NAME)?, slots, c, w)),
             _ => candle_core::bail!("neighbour minimum: values must be f32 or f64"),
         };
         Ok((out, l1.shape().clone()))
@@ -140,8 +137,8 @@ impl CustomOp2 for NeighbourMinimum {
         grad: &Tensor,
     ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
         // f32 → f64 is exact and keeps the order, so the argmin is the forward pass's.
-        let y: Vec<f64> = values.to_dtype(DType::F64)?.flatten_all()?.to_vec1()?;
-        let g: Vec<f64> = grad.to_dtype(DType::F64)?.flatten_all()?.to_vec1()?;
+        let y = host_f64(values)?;
+        let g = host_f64(grad)?;
         let slot_list: Vec<u32> = slots.flatten_all()?.to_vec1()?;
         let (n, c, w) = dimensions(values.shape(), slot_list.len())?;
         let mut input_grad = vec![0f64; n * c];
@@ -164,7 +161,7 @@ impl CustomOp2 for NeighbourMinimum {
 mod tests {
     use super::*;
     use crate::mesh_simplifier::NeighbourSlots;
-    use candle_core::{D, Device};
+    use candle_core::{D, DType, Device};
     use meshgnn_losses::losses::gradient_disagreement;
 
     /// The gather-and-reduce formulation the op replaces, empty slots reading `+∞`.

@@ -7,10 +7,14 @@
 //! The backward pass gives `k_i` the sum over its slots and `q_j` the sum over the slots that
 //! read it (through the slots reversed), each row written by one task, in a fixed order.
 
-use candle_core::{CpuStorage, CustomOp2, DType, Layout, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 use super::incoming_links::IncomingLinks;
+use super::op_operands::{contiguous, host_f64};
+
+/// The name in error messages.
+const NAME: &str = "slot dot products";
 
 /// Points per parallel task.
 const ROWS_PER_TASK: usize = 1024;
@@ -86,13 +90,6 @@ where
     out
 }
 
-fn slice<'a, T>(values: &'a [T], layout: &Layout) -> candle_core::Result<&'a [T]> {
-    match layout.contiguous_offsets() {
-        Some((start, end)) => Ok(&values[start..end]),
-        None => candle_core::bail!("slot dot products: operands must be contiguous"),
-    }
-}
-
 impl CustomOp2 for SlotDotProducts {
     fn name(&self) -> &'static str {
         "slot-dot-products"
@@ -107,12 +104,20 @@ impl CustomOp2 for SlotDotProducts {
     ) -> candle_core::Result<(CpuStorage, Shape)> {
         let (n, w, h, slots) = self.operands(l1.shape(), l2.shape())?;
         let out = match (s1, s2) {
-            (CpuStorage::F32(q), CpuStorage::F32(k)) => {
-                CpuStorage::F32(forward(slice(q, l1)?, slice(k, l2)?, &slots, w, h))
-            }
-            (CpuStorage::F64(q), CpuStorage::F64(k)) => {
-                CpuStorage::F64(forward(slice(q, l1)?, slice(k, l2)?, &slots, w, h))
-            }
+            (CpuStorage::F32(q), CpuStorage::F32(k)) => CpuStorage::F32(forward(
+                contiguous(q, l1, NAME)?,
+                contiguous(k, l2, NAME)?,
+                &slots,
+                w,
+                h,
+            )),
+            (CpuStorage::F64(q), CpuStorage::F64(k)) => CpuStorage::F64(forward(
+                contiguous(q, l1, NAME)?,
+                contiguous(k, l2, NAME)?,
+                &slots,
+                w,
+                h,
+            )),
             _ => candle_core::bail!("slot dot products: operands must both be f32 or f64"),
         };
         Ok((out, Shape::from((n, w))))
@@ -126,10 +131,7 @@ impl CustomOp2 for SlotDotProducts {
         grad: &Tensor,
     ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
         let (n, w, h, slots) = self.operands(query.shape(), key.shape())?;
-        let host = |t: &Tensor| -> candle_core::Result<Vec<f64>> {
-            t.to_dtype(DType::F64)?.flatten_all()?.to_vec1()
-        };
-        let (q, k, g) = (host(query)?, host(key)?, host(grad)?);
+        let (q, k, g) = (host_f64(query)?, host_f64(key)?, host_f64(grad)?);
         let mut key_grad = vec![0.0; n * h];
         let mut query_grad = vec![0.0; n * h];
         if h > 0 && w > 0 {
@@ -167,7 +169,7 @@ impl CustomOp2 for SlotDotProducts {
 mod tests {
     use super::*;
     use crate::mesh_simplifier::NeighbourSlots;
-    use candle_core::{D, Device};
+    use candle_core::{D, DType, Device};
     use meshgnn_losses::losses::gradient_disagreement;
 
     fn operands() -> (Tensor, Tensor, NeighbourSlots) {

@@ -1,0 +1,23 @@
+//! What the fused graph operations (`neighbour_minimum`, `link_message_mean`,
+//! `slot_dot_products`) share to read their operands: the contiguous host slice of a storage
+//! in the forward pass, and a tensor as `f64` values in the backward pass (every backward pass
+//! computes in `f64`; `f32 → f64` is exact and keeps the order of values).
+
+use candle_core::{DType, Layout, Tensor};
+
+/// The slice of `values` that `layout` covers; an error naming `op` unless it is contiguous.
+pub(super) fn contiguous<'a, T>(
+    values: &'a [T],
+    layout: &Layout,
+    op: &str,
+) -> candle_core::Result<&'a [T]> {
+    match layout.contiguous_offsets() {
+        Some((start, end)) => Ok(&values[start..end]),
+        None => candle_core::bail!("{op}: operands must be contiguous"),
+    }
+}
+
+/// Every value of `tensor`, row-major, as `f64`.
+pub(super) fn host_f64(tensor: &Tensor) -> candle_core::Result<Vec<f64>> {
+    tensor.to_dtype(DType::F64)?.flatten_all()?.to_vec1()
+}
