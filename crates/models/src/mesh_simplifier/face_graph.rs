@@ -5,11 +5,14 @@
 //! the per-coordinate maximum (minimum) of the triangle's edge vectors `e_ij = x_i − x_j`,
 //! `e_ik`, `e_jk` (corners `i < j < k` as the candidates list them) and `b` its barycentre.
 //!
-//! The encoding depends on positions only, so it is computed once on the host, with the
-//! candidates' geometric features ([`super::candidate_features`]).
+//! The encoding is the difference of one descriptor per triangle, `d_n = [t_n^min ‖ t_n^max ‖
+//! b_n]`, so the graph keeps those (`r_{n,m} = d_n − d_m`): a layer linear in `r` applies its
+//! weights once per triangle instead of once per link ([`super::TriConv`]). They depend on
+//! positions only and are computed once on the host, with the candidates' geometric features
+//! ([`super::candidate_features`]).
 //!
 //! # Conventions
-//! - `neighbours`: `(F·K)` `u32`, row-major; `relative`: `(F·K, 9)`.
+//! - `neighbours`: `(F·K)` `u32`, row-major; `descriptors`: `(F, 9)`.
 //! - With fewer than two candidates there are no links: `K = 0`.
 
 use candle_core::{Device, Tensor};
@@ -22,7 +25,8 @@ use crate::Result;
 #[derive(Clone, Debug)]
 pub struct FaceGraph {
     pub(crate) neighbours: Tensor,
-    pub(crate) relative: Tensor,
+    /// `d_n` of every triangle, `(F, 9)` (module docs).
+    pub(crate) descriptors: Tensor,
     /// `(F, CANDIDATE_FEATURES)`.
     pub(crate) features: Tensor,
     len: usize,
@@ -69,22 +73,18 @@ impl FaceGraph {
             0 => Vec::new(),
             _ => triangle_knn_graph(vertices, triangles, width)?.indices,
         };
-        let extremes: Vec<[f32; 6]> = triangles
+        let descriptors: Vec<f32> = triangles
             .iter()
-            .map(|t| edge_extremes(t.map(|v| vertices[v as usize])))
+            .zip(&centres)
+            .flat_map(|(t, centre)| {
+                let extremes = edge_extremes(t.map(|v| vertices[v as usize]));
+                extremes.into_iter().chain(centre.iter().copied())
+            })
             .collect();
-        let mut relative = Vec::with_capacity(len * width * 9);
-        for (n, row) in neighbours.chunks(width.max(1)).enumerate() {
-            for &m in row {
-                let m = m as usize;
-                relative.extend((0..6).map(|c| extremes[n][c] - extremes[m][c]));
-                relative.extend((0..3).map(|c| centres[n][c] - centres[m][c]));
-            }
-        }
         let features = candidate_features(vertices, normals, triangles)?;
         Ok(Self {
             neighbours: Tensor::from_vec(neighbours, len * width, device)?,
-            relative: Tensor::from_vec(relative, (len * width, 9), device)?,
+            descriptors: Tensor::from_vec(descriptors, (len, 9), device)?,
             features: Tensor::from_vec(features, (len, CANDIDATE_FEATURES), device)?,
             len,
             width,
@@ -112,7 +112,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn relative_encoding_matches_a_hand_computation() {
+    fn descriptors_and_their_differences_match_a_hand_computation() {
         let v = [
             [0.0, 0.0, 0.0],
             [2.0, 0.0, 0.0],
@@ -125,14 +125,25 @@ mod tests {
         //     barycentre (2/3, 2/3, 0).
         // t1: e01 = (-2,0,0), e03 = (0,0,-3), e13 = (2,0,-3) → min (-2,0,-3), max (2,0,0),
         //     barycentre (2/3, 0, 1).
-        let r: Vec<Vec<f32>> = g.relative.to_vec2().unwrap();
-        let expected0 = [0.0, -2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 2.0 / 3.0, -1.0];
-        for (got, want) in r[0].iter().zip(expected0) {
-            assert!((got - want).abs() < 1e-6, "{:?}", r[0]);
+        let d: Vec<Vec<f32>> = g.descriptors.to_vec2().unwrap();
+        let third = 2.0 / 3.0;
+        let expected = [
+            [-2.0, -2.0, 0.0, 2.0, 0.0, 0.0, third, third, 0.0],
+            [-2.0, 0.0, -3.0, 2.0, 0.0, 0.0, third, 0.0, 1.0],
+        ];
+        for (got, want) in d.iter().zip(expected) {
+            for (a, b) in got.iter().zip(want) {
+                assert!((a - b).abs() < 1e-6, "{got:?}");
+            }
         }
-        for (a, b) in r[0].iter().zip(&r[1]) {
-            assert!((a + b).abs() < 1e-6, "r(1,0) = −r(0,1)");
+        // r(0, 1) = d_0 − d_1, the link of triangle 0 to triangle 1.
+        let r01: Vec<f32> = d[0].iter().zip(&d[1]).map(|(a, b)| a - b).collect();
+        let expected01 = [0.0, -2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 2.0 / 3.0, -1.0];
+        for (got, want) in r01.iter().zip(expected01) {
+            assert!((got - want).abs() < 1e-6, "{r01:?}");
         }
+        let links: Vec<u32> = g.neighbours.to_vec1().unwrap();
+        assert_eq!(links, vec![1, 0]);
         let one = FaceGraph::new(&v, &n, &[[0, 1, 2]], 5, &Device::Cpu).unwrap();
         assert_eq!((one.len(), one.width()), (1, 0));
     }

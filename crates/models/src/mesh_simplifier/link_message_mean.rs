@@ -1,17 +1,17 @@
 //! The inner sum of TriConv (eq. 6.7) as one fused operation:
-//! `m_n = 1/K Σ_k ReLU(r_{n,k} W + b + p_n − p_{l(n,k)})`, where `r` is the eq. 6.6 encoding
-//! of each link, `W` the first MLP layer's columns for it, `p = W_f f` the projected triangle
-//! features and `l(n, k)` the `k`-th link of triangle `n`. Computed with tensor operations,
-//! every link's `C`-channel hidden vector is materialised several times over (`F·K·C`: 100M
-//! values for 40k candidates at K = 20 and 128 channels); here each lives in one small buffer
-//! while its link is summed, and only `F·C` values are written.
+//! `m_n = 1/K Σ_k ReLU(q_n − q_{l(n,k)} + b)`, where `l(n, k)` is the `k`-th link of triangle
+//! `n`, `b` the first MLP layer's bias and `q_n = W [d_n ‖ f_n]` the layer's weights applied
+//! once per triangle to its eq. 6.6 descriptor and features (the layer's input on a link,
+//! `[d_n − d_m ‖ f_n − f_m]`, is a difference, and the layer is linear in it). Computed with
+//! tensor operations, every link's `C`-channel hidden vector is materialised several times
+//! over (`F·K·C`: 100M values for 40k candidates at K = 20 and 128 channels); here each lives
+//! in one small buffer while its link is summed, and only `F·C` values are written.
 //!
-//! `weight` stacks `W` (9 rows) over `b` (one row), so that one operand carries both and their
-//! gradients. The backward pass recomputes the hidden vectors instead of keeping them: first
-//! per triangle (its own `p_n`, `W` and `b`), then per linked triangle through the reversed
-//! links (`−p_l`), so that each pass writes only rows it owns and runs in parallel.
+//! The backward pass recomputes the hidden vectors instead of keeping them: first per
+//! triangle (its own `q_n` and `b`), then per linked triangle through the reversed links
+//! (`−q_l`), so that each pass writes only rows it owns and runs in parallel.
 
-use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 use super::incoming_links::IncomingLinks;
@@ -20,23 +20,18 @@ use super::op_operands::{contiguous, host_f64};
 /// The name in error messages.
 const NAME: &str = "link message mean";
 
-/// Relative-position channels of a link (eq. 6.6).
-const RELATIVE: usize = 9;
-
 /// Triangles per parallel task.
 const ROWS_PER_TASK: usize = 256;
 
-/// `link_message_mean(relative (F·K, 9), weight (10, C), projected (F, C), links (F·K) u32)
-/// → (F, C)` (module docs); gradients reach `weight` and `projected`.
+/// `link_message_mean(values (F, C), bias (C), links (F·K) u32) → (F, C)` (module docs);
+/// gradients reach `values` and `bias`.
 pub fn link_message_mean(
-    relative: &Tensor,
-    weight: &Tensor,
-    projected: &Tensor,
+    values: &Tensor,
+    bias: &Tensor,
     links: &Tensor,
 ) -> candle_core::Result<Tensor> {
-    relative.contiguous()?.apply_op3(
-        &weight.contiguous()?,
-        &projected.contiguous()?,
+    values.contiguous()?.apply_op2(
+        &bias.contiguous()?,
         LinkMessageMean {
             links: links.contiguous()?,
         },
@@ -63,7 +58,6 @@ trait Real:
     + PartialOrd
     + std::ops::Add<Output = Self>
     + std::ops::Sub<Output = Self>
-    + std::ops::Mul<Output = Self>
     + std::ops::Div<Output = Self>
     + std::ops::AddAssign
 {
@@ -87,9 +81,8 @@ impl Real for f64 {
 
 /// The operands of one call, on the host.
 struct Operands<'a, T> {
-    relative: &'a [T],
-    weight: &'a [T],
-    projected: &'a [T],
+    values: &'a [T],
+    bias: &'a [T],
     links: &'a [u32],
     sizes: Sizes,
 }
@@ -98,19 +91,11 @@ impl<T: Real> Operands<'_, T> {
     /// The hidden vector of link `(n, slot)` before the ReLU, into `hidden`.
     fn hidden(&self, n: usize, slot: usize, hidden: &mut [T]) {
         let c = self.sizes.c;
-        let link = n * self.sizes.k + slot;
-        let other = self.links[link] as usize;
-        let own = &self.projected[n * c..(n + 1) * c];
-        let theirs = &self.projected[other * c..(other + 1) * c];
-        let bias = &self.weight[RELATIVE * c..(RELATIVE + 1) * c];
-        for (h, ((&b, &p), &q)) in hidden.iter_mut().zip(bias.iter().zip(own).zip(theirs)) {
-            *h = b + p - q;
-        }
-        let encoding = &self.relative[link * RELATIVE..(link + 1) * RELATIVE];
-        for (d, &r) in encoding.iter().enumerate() {
-            for (h, &w) in hidden.iter_mut().zip(&self.weight[d * c..(d + 1) * c]) {
-                *h += r * w;
-            }
+        let other = self.links[n * self.sizes.k + slot] as usize;
+        let own = &self.values[n * c..(n + 1) * c];
+        let theirs = &self.values[other * c..(other + 1) * c];
+        for (h, ((&b, &p), &q)) in hidden.iter_mut().zip(self.bias.iter().zip(own).zip(theirs)) {
+            *h = p - q + b;
         }
     }
 }
@@ -145,24 +130,11 @@ fn forward<T: Real>(operands: &Operands<T>) -> Vec<T> {
 
 impl LinkMessageMean {
     /// The sizes of the operands' shapes, checked against each other and the links.
-    fn sizes(
-        &self,
-        relative: &Shape,
-        weight: &Shape,
-        projected: &Shape,
-    ) -> candle_core::Result<Sizes> {
-        let (links, r) = relative.dims2()?;
-        let (w, c) = weight.dims2()?;
-        let (f, pc) = projected.dims2()?;
-        if r != RELATIVE || w != RELATIVE + 1 || pc != c || self.links.dims1()? != links {
-            candle_core::bail!(
-                "link message mean: relative {relative:?}, weight {weight:?}, projected \
-                 {projected:?}, {:?} links",
-                self.links.dims()
-            );
-        }
-        if f == 0 || !links.is_multiple_of(f) {
-            candle_core::bail!("link message mean: {links} links for {f} triangles");
+    fn sizes(&self, values: &Shape, bias: &Shape) -> candle_core::Result<Sizes> {
+        let (f, c) = values.dims2()?;
+        let links = self.links.dims1()?;
+        if bias.elem_count() != c || f == 0 || !links.is_multiple_of(f) {
+            candle_core::bail!("{NAME}: values {values:?}, bias {bias:?}, {links} links");
         }
         Ok(Sizes { f, k: links / f, c })
     }
@@ -171,13 +143,13 @@ impl LinkMessageMean {
     fn link_list(&self, sizes: Sizes) -> candle_core::Result<Vec<u32>> {
         let links: Vec<u32> = self.links.to_vec1()?;
         if let Some(bad) = links.iter().find(|&&l| l as usize >= sizes.f) {
-            candle_core::bail!("link message mean: link to {bad} of {} triangles", sizes.f);
+            candle_core::bail!("{NAME}: link to {bad} of {} triangles", sizes.f);
         }
         Ok(links)
     }
 }
 
-impl CustomOp3 for LinkMessageMean {
+impl CustomOp2 for LinkMessageMean {
     fn name(&self) -> &'static str {
         "link-message-mean"
     }
@@ -188,74 +160,60 @@ impl CustomOp3 for LinkMessageMean {
         l1: &Layout,
         s2: &CpuStorage,
         l2: &Layout,
-        s3: &CpuStorage,
-        l3: &Layout,
     ) -> candle_core::Result<(CpuStorage, Shape)> {
-        let sizes = self.sizes(l1.shape(), l2.shape(), l3.shape())?;
+        let sizes = self.sizes(l1.shape(), l2.shape())?;
         let links = self.link_list(sizes)?;
-        let out = match (s1, s2, s3) {
-            (CpuStorage::F32(r), CpuStorage::F32(w), CpuStorage::F32(p)) => {
-                CpuStorage::F32(forward(&Operands {
-                    relative: contiguous(r, l1, NAME)?,
-                    weight: contiguous(w, l2, NAME)?,
-                    projected: contiguous(p, l3, NAME)?,
-                    links: &links,
-                    sizes,
-                }))
-            }
-            (CpuStorage::F64(r), CpuStorage::F64(w), CpuStorage::F64(p)) => {
-                CpuStorage::F64(forward(&Operands {
-                    relative: contiguous(r, l1, NAME)?,
-                    weight: contiguous(w, l2, NAME)?,
-                    projected: contiguous(p, l3, NAME)?,
-                    links: &links,
-                    sizes,
-                }))
-            }
-            _ => candle_core::bail!("link message mean: operands must all be f32 or all f64"),
+        let out = match (s1, s2) {
+            (CpuStorage::F32(v), CpuStorage::F32(b)) => CpuStorage::F32(forward(&Operands {
+                values: contiguous(v, l1, NAME)?,
+                bias: contiguous(b, l2, NAME)?,
+                links: &links,
+                sizes,
+            })),
+            (CpuStorage::F64(v), CpuStorage::F64(b)) => CpuStorage::F64(forward(&Operands {
+                values: contiguous(v, l1, NAME)?,
+                bias: contiguous(b, l2, NAME)?,
+                links: &links,
+                sizes,
+            })),
+            _ => candle_core::bail!("{NAME}: operands must both be f32 or both f64"),
         };
         Ok((out, Shape::from((sizes.f, sizes.c))))
     }
 
     fn bwd(
         &self,
-        relative: &Tensor,
-        weight: &Tensor,
-        projected: &Tensor,
+        values: &Tensor,
+        bias: &Tensor,
         _result: &Tensor,
         grad: &Tensor,
-    ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>, Option<Tensor>)> {
-        let sizes = self.sizes(relative.shape(), weight.shape(), projected.shape())?;
+    ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
+        let sizes = self.sizes(values.shape(), bias.shape())?;
         let links = self.link_list(sizes)?;
-        let (r, w, p, g) = (
-            host_f64(relative)?,
-            host_f64(weight)?,
-            host_f64(projected)?,
-            host_f64(grad)?,
-        );
+        let (v, b, g) = (host_f64(values)?, host_f64(bias)?, host_f64(grad)?);
         let operands = Operands {
-            relative: &r,
-            weight: &w,
-            projected: &p,
+            values: &v,
+            bias: &b,
             links: &links,
             sizes,
         };
-        let (weight_grad, projected_grad) = backward(&operands, &g);
-        let weight_grad = Tensor::from_vec(weight_grad, weight.shape(), weight.device())?;
-        let projected_grad =
-            Tensor::from_vec(projected_grad, projected.shape(), projected.device())?;
+        let (values_grad, bias_grad) = backward(&operands, &g);
+        let values_grad = Tensor::from_vec(values_grad, values.shape(), values.device())?;
+        let bias_grad = Tensor::from_vec(bias_grad, bias.shape(), bias.device())?;
         Ok((
-            None,
-            Some(weight_grad.to_dtype(weight.dtype())?),
-            Some(projected_grad.to_dtype(projected.dtype())?),
+            Some(values_grad.to_dtype(values.dtype())?),
+            Some(bias_grad.to_dtype(bias.dtype())?),
         ))
     }
 }
 
-/// The gradients of `weight` and `projected` for the output gradient `grad` (module docs).
+/// The gradients of `values` and `bias` for the output gradient `grad` (module docs).
 fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let Sizes { f, k, c } = operands.sizes;
-    let (relative, links) = (operands.relative, operands.links);
+    let mut values_grad = vec![0.0; f * c];
+    if c == 0 || k == 0 {
+        return (values_grad, vec![0.0; c]);
+    }
     let scale = 1.0 / k as f64;
     // The gradient reaching link (n, slot)'s hidden vector: g_n / K where it passed the ReLU.
     let link_grad = |n: usize, slot: usize, hidden: &mut [f64]| {
@@ -264,53 +222,36 @@ fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
             *h = if *h > 0.0 { gn * scale } else { 0.0 };
         }
     };
-    let mut projected_grad = vec![0.0; f * c];
-    if c == 0 || k == 0 {
-        return (vec![0.0; (RELATIVE + 1) * c], projected_grad);
-    }
-    // Per triangle: its own row of `projected`, and partial sums for `weight`, kept per task
-    // and added in task order (deterministic).
-    let partials: Vec<Vec<f64>> = projected_grad
+    // Per triangle: its own row, and partial sums for the bias, kept per task and added in
+    // task order (deterministic).
+    let partials: Vec<Vec<f64>> = values_grad
         .par_chunks_mut(ROWS_PER_TASK * c)
         .enumerate()
         .map(|(task, rows)| {
-            let mut weight_grad = vec![0.0; (RELATIVE + 1) * c];
+            let mut bias_grad = vec![0.0; c];
             let mut hidden = vec![0.0; c];
             for (offset, row) in rows.chunks_mut(c).enumerate() {
                 let n = task * ROWS_PER_TASK + offset;
                 for slot in 0..k {
                     link_grad(n, slot, &mut hidden);
-                    let link = n * k + slot;
-                    for (d, &r) in relative[link * RELATIVE..(link + 1) * RELATIVE]
-                        .iter()
-                        .enumerate()
-                    {
-                        for (wg, &h) in weight_grad[d * c..(d + 1) * c].iter_mut().zip(&hidden) {
-                            *wg += r * h;
-                        }
-                    }
-                    for ((wg, o), &h) in weight_grad[RELATIVE * c..]
-                        .iter_mut()
-                        .zip(row.iter_mut())
-                        .zip(&hidden)
-                    {
-                        *wg += h;
+                    for ((bg, o), &h) in bias_grad.iter_mut().zip(row.iter_mut()).zip(&hidden) {
+                        *bg += h;
                         *o += h;
                     }
                 }
             }
-            weight_grad
+            bias_grad
         })
         .collect();
-    let mut weight_grad = vec![0.0; (RELATIVE + 1) * c];
+    let mut bias_grad = vec![0.0; c];
     for partial in partials {
-        for (total, part) in weight_grad.iter_mut().zip(partial) {
+        for (total, part) in bias_grad.iter_mut().zip(partial) {
             *total += part;
         }
     }
-    // Per linked triangle: `−p_l` through the links reversed.
-    let incoming = IncomingLinks::new(links, f);
-    projected_grad
+    // Per linked triangle: `−q_l` through the links reversed.
+    let incoming = IncomingLinks::new(operands.links, f);
+    values_grad
         .par_chunks_mut(ROWS_PER_TASK * c)
         .enumerate()
         .for_each(|(task, rows)| {
@@ -326,7 +267,7 @@ fn backward(operands: &Operands<f64>, grad: &[f64]) -> (Vec<f64>, Vec<f64>) {
                 }
             }
         });
-    (weight_grad, projected_grad)
+    (values_grad, bias_grad)
 }
 
 #[cfg(test)]
@@ -336,91 +277,75 @@ mod tests {
     use meshgnn_losses::losses::gradient_disagreement;
 
     /// Four triangles with three links each, channels 5, in `f64`.
-    fn operands() -> (Tensor, Tensor, Tensor, Tensor) {
+    fn operands() -> (Tensor, Tensor, Tensor) {
         let cpu = &Device::Cpu;
-        let wave = |n: usize, a: usize, b: usize| -> Vec<f64> {
-            (0..n)
-                .map(|i| (((i * a + b) % 11) as f64 - 5.0) * 0.13)
-                .collect()
+        // Incommensurate values, so that no hidden value sits on the ReLU's kink.
+        let wave = |n: usize, a: f64, b: f64| -> Vec<f64> {
+            (0..n).map(|i| (i as f64 * a + b).sin()).collect()
         };
-        let relative = Tensor::from_vec(wave(12 * 9, 7, 3), (12, 9), cpu).unwrap();
-        let weight = Tensor::from_vec(wave(10 * 5, 5, 1), (10, 5), cpu).unwrap();
-        let projected = Tensor::from_vec(wave(4 * 5, 3, 2), (4, 5), cpu).unwrap();
+        let values = Tensor::from_vec(wave(4 * 5, 1.7, 0.3), (4, 5), cpu).unwrap();
+        let bias = Tensor::from_vec(wave(5, 2.3, 0.9), 5, cpu).unwrap();
         let links = Tensor::new(&[1u32, 2, 3, 0, 2, 3, 3, 0, 1, 2, 1, 0], cpu).unwrap();
-        (relative, weight, projected, links)
+        (values, bias, links)
     }
 
     /// The formula with tensor operations, every link's hidden vector materialised.
-    fn materialised(
-        relative: &Tensor,
-        weight: &Tensor,
-        projected: &Tensor,
-        links: &Tensor,
-    ) -> Tensor {
-        let (f, c) = projected.dims2().unwrap();
+    fn materialised(values: &Tensor, bias: &Tensor, links: &Tensor) -> Tensor {
+        let (f, c) = values.dims2().unwrap();
         let k = links.dims1().unwrap() / f;
-        let w = weight.narrow(0, 0, 9).unwrap();
-        let b = weight.narrow(0, 9, 1).unwrap();
-        let own = projected
+        let own = values
             .unsqueeze(1)
             .unwrap()
             .broadcast_as((f, k, c))
             .unwrap();
-        let theirs = projected
+        let theirs = values
             .index_select(links, 0)
             .unwrap()
             .reshape((f, k, c))
             .unwrap();
-        let hidden = relative
-            .matmul(&w)
+        (own - theirs)
             .unwrap()
-            .broadcast_add(&b)
+            .broadcast_add(bias)
             .unwrap()
-            .reshape((f, k, c))
+            .relu()
             .unwrap()
-            .add(&own)
+            .mean(D::Minus2)
             .unwrap()
-            .sub(&theirs)
-            .unwrap();
-        hidden.relu().unwrap().mean(D::Minus2).unwrap()
     }
 
     #[test]
     fn equals_the_materialised_formula_in_both_widths() {
-        let (r, w, p, l) = operands();
-        let expected: Vec<Vec<f64>> = materialised(&r, &w, &p, &l).to_vec2().unwrap();
-        let got: Vec<Vec<f64>> = link_message_mean(&r, &w, &p, &l)
-            .unwrap()
-            .to_vec2()
-            .unwrap();
+        let (v, b, l) = operands();
+        let expected: Vec<Vec<f64>> = materialised(&v, &b, &l).to_vec2().unwrap();
+        let got: Vec<Vec<f64>> = link_message_mean(&v, &b, &l).unwrap().to_vec2().unwrap();
         for (a, b) in expected.iter().flatten().zip(got.iter().flatten()) {
             assert!((a - b).abs() <= 1e-12, "{a} vs {b}");
         }
         // Some links pass the ReLU and some do not, so both branches are exercised.
         assert!(got.iter().flatten().any(|&v| v > 0.0));
         let single = |t: &Tensor| t.to_dtype(DType::F32).unwrap();
-        let got32: Vec<Vec<f32>> = link_message_mean(&single(&r), &single(&w), &single(&p), &l)
+        let got32: Vec<Vec<f32>> = link_message_mean(&single(&v), &single(&b), &l)
             .unwrap()
             .to_vec2()
             .unwrap();
         for (a, b) in expected.iter().flatten().zip(got32.iter().flatten()) {
-            assert!((a - f64::from(*b)).abs() <= 1e-5, "{a} vs {b}");
+            assert!((a - f64::from(*b)).abs() <= 1e-6, "{a} vs {b}");
         }
     }
 
     #[test]
     fn gradients_match_finite_differences() {
-        let (r, w, p, l) = operands();
+        let (v, b, l) = operands();
         let scale = Tensor::arange(1f64, 21.0, &Device::Cpu)
             .unwrap()
             .reshape((4, 5))
             .unwrap();
-        let loss = |w: &Tensor, p: &Tensor| -> crate::Result<Tensor> {
-            Ok((link_message_mean(&r, w, p, &l)? * &scale)?.sum_all()?)
+        let loss = |v: &Tensor, b: &Tensor| -> crate::Result<Tensor> {
+            Ok((link_message_mean(v, b, &l)? * &scale)?.sum_all()?)
         };
         for worst in [
-            gradient_disagreement(&w, |w| loss(w, &p)).unwrap(),
-            gradient_disagreement(&p, |p| loss(&w, p)).unwrap(),
+            gradient_disagreement(&v, |v| loss(v, &b)).unwrap(),
+            gradient_disagreement(&b, |b| loss(&v, b)).unwrap(),
         ] {
             assert!(worst.relative_error <= 1e-6, "{worst:?}");
             assert!(worst.largest_gradient > 0.1, "{worst:?}");
@@ -429,14 +354,14 @@ mod tests {
 
     #[test]
     fn mismatched_operands_are_errors() {
-        let (r, w, p, l) = operands();
+        let (v, b, l) = operands();
         let cpu = &Device::Cpu;
         let short = Tensor::new(&[0u32, 1, 2], cpu).unwrap();
-        assert!(link_message_mean(&r, &w, &p, &short).is_err());
+        assert!(link_message_mean(&v, &b, &short).is_err());
         let outside = Tensor::new(&[9u32; 12], cpu).unwrap();
-        assert!(link_message_mean(&r, &w, &p, &outside).is_err());
-        assert!(link_message_mean(&r, &w.narrow(0, 0, 9).unwrap(), &p, &l).is_err());
-        let mixed = p.to_dtype(DType::F32).unwrap();
-        assert!(link_message_mean(&r, &w, &mixed, &l).is_err());
+        assert!(link_message_mean(&v, &b, &outside).is_err());
+        assert!(link_message_mean(&v, &b.narrow(0, 0, 4).unwrap(), &l).is_err());
+        let mixed = b.to_dtype(DType::F32).unwrap();
+        assert!(link_message_mean(&v, &mixed, &l).is_err());
     }
 }
