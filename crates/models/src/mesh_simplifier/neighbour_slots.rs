@@ -3,11 +3,10 @@
 //!
 //! # Conventions
 //! - `indices` is `(N·W)` `u32`, row-major: row `i` holds the `W` neighbour slots of point `i`.
-//! - An empty slot holds [`NeighbourSlots::len`] (= N), one past the last point: the layer
-//!   reads a row there that can never be the maximum. Repeating a real neighbour instead would
-//!   leave the maximum unchanged but not its gradient (the maximum's backward pass gives every
-//!   tied entry the full gradient), and a mean layer pads differently again
-//!   ([`crate::point_simplifier::NeighbourIndex`], weight 0).
+//! - An empty slot holds [`NeighbourSlots::len`] (= N), one past the last point: the fused
+//!   operations that read the slots ([`super::neighbour_minimum`], [`super::slot_dot_products`])
+//!   skip it, so it never counts as a neighbour. (A mean layer pads differently,
+//!   [`crate::point_simplifier::NeighbourIndex`], weight 0.)
 //! - A point with no neighbour (an isolated vertex) lists itself once, so its relative
 //!   features are zero; otherwise a point never lists itself (mesh adjacencies with a diagonal
 //!   are cleaned).
