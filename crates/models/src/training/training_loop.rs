@@ -31,7 +31,7 @@ pub struct TrainingConfig {
     pub learning_rate: f64,
     /// Learning rate factor per epoch (`lr_e = lr · decay^e`). Default 0.99.
     pub lr_decay: f64,
-    /// Adam's weight decay `λ` (see [`crate::adam`]). Default 0.
+    /// Adam's weight decay `λ` (see [`crate::AdamConfig`]). Default 0.
     pub weight_decay: f64,
     /// Seed of the data order (and of whatever the model draws per step). Default 0.
     pub seed: u64,
