@@ -277,9 +277,8 @@ fn run(
     let mut rejected_for_error = false;
     let mut bounded = true;
     let mut pass = 0u32;
-    let mut scratch = Vec::new();
     let initial_edges = std::mem::take(&mut state.initial_edges);
-    let mut candidates = score(state, &initial_edges, &mut scratch);
+    let mut candidates = score(state, &initial_edges);
     drop(initial_edges);
     let n = state.verts.len();
     // Vertices changed (survivors) or removed in this pass; those changed in this batch.
@@ -294,7 +293,7 @@ fn run(
     while state.live_faces > target {
         pass += 1;
         if pass > 1 {
-            candidates = rescore(state, candidates, &touched, &changed, &mut scratch);
+            candidates = rescore(state, candidates, &touched, &changed);
         }
         touched.clear();
         changed.clear();
@@ -390,7 +389,7 @@ fn run(
 /// The collapsible edges of `edges` with their cost keys, scored in parallel (the far
 /// endpoints' records and quadrics warmed per chunk of 64 edges), sorted by key (ties in the
 /// order of `edges`).
-fn score(state: &Collapser, edges: &[(u32, u32)], scratch: &mut Vec<Candidate>) -> Vec<Candidate> {
+fn score(state: &Collapser, edges: &[(u32, u32)]) -> Vec<Candidate> {
     let mut candidates: Vec<Candidate> = edges
         .par_chunks(64)
         .flat_map_iter(|chunk| {
@@ -404,7 +403,7 @@ fn score(state: &Collapser, edges: &[(u32, u32)], scratch: &mut Vec<Candidate>) 
             })
         })
         .collect();
-    radix_sort(&mut candidates, scratch);
+    radix_sort(&mut candidates);
     candidates
 }
 
@@ -416,7 +415,6 @@ fn rescore(
     previous: Vec<Candidate>,
     touched: &[u32],
     changed: &VertexBits,
-    scratch: &mut Vec<Candidate>,
 ) -> Vec<Candidate> {
     // Edges around touched survivors (alive: a changed vertex is not collapsed again in its
     // pass); one between two touched vertices is emitted by the smaller. Rings are small:
@@ -494,7 +492,7 @@ fn rescore(
         }
     }
     drop(chunks);
-    radix_sort(&mut fresh, scratch);
+    radix_sort(&mut fresh);
     merge_sorted(
         &previous,
         |c| !changed.contains(c.a) && !changed.contains(c.b),
