@@ -15,7 +15,7 @@ use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 use super::incoming_links::IncomingLinks;
-use super::op_operands::{contiguous, host_f64};
+use super::op_operands::{Real, contiguous, host_f64};
 
 /// The name in error messages.
 const NAME: &str = "link message mean";
@@ -48,35 +48,6 @@ struct Sizes {
     f: usize,
     k: usize,
     c: usize,
-}
-
-/// The arithmetic both float widths need.
-trait Real:
-    Copy
-    + Send
-    + Sync
-    + PartialOrd
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::Div<Output = Self>
-    + std::ops::AddAssign
-{
-    const ZERO: Self;
-    fn from_count(n: usize) -> Self;
-}
-
-impl Real for f32 {
-    const ZERO: Self = 0.0;
-    fn from_count(n: usize) -> Self {
-        n as f32
-    }
-}
-
-impl Real for f64 {
-    const ZERO: Self = 0.0;
-    fn from_count(n: usize) -> Self {
-        n as f64
-    }
 }
 
 /// The operands of one call, on the host.

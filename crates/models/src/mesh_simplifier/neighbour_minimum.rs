@@ -13,7 +13,7 @@
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
-use super::op_operands::{contiguous, host_f64};
+use super::op_operands::{Real, contiguous, host_f64};
 
 /// The name in error messages.
 const NAME: &str = "neighbour minimum";
@@ -42,12 +42,7 @@ fn dimensions(values: &Shape, slot_count: usize) -> candle_core::Result<(usize, 
 /// Row `i` of the minimum (module docs) into `out_row`, which holds the point's own row on
 /// entry, and, into `from`, the point whose value each channel took (the first on a tie): the
 /// backward pass's argmin.
-fn minimum_row<T: PartialOrd + Copy>(
-    values: &[T],
-    row: &[u32],
-    out_row: &mut [T],
-    from: &mut [usize],
-) {
+fn minimum_row<T: Real>(values: &[T], row: &[u32], out_row: &mut [T], from: &mut [usize]) {
     let channels = out_row.len();
     if channels == 0 {
         return;
@@ -70,12 +65,7 @@ fn minimum_row<T: PartialOrd + Copy>(
     }
 }
 
-fn minimum<T: PartialOrd + Copy + Send + Sync>(
-    values: &[T],
-    slots: &[u32],
-    channels: usize,
-    width: usize,
-) -> Vec<T> {
+fn minimum<T: Real>(values: &[T], slots: &[u32], channels: usize, width: usize) -> Vec<T> {
     let mut out = values.to_vec();
     if channels == 0 {
         return out;

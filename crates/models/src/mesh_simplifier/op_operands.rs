@@ -1,5 +1,6 @@
 //! What the fused graph operations (`neighbour_minimum`, `link_message_mean`,
-//! `slot_dot_products`) share to read their operands: the contiguous host slice of a storage
+//! `slot_dot_products`) share: the float arithmetic they are generic over and, to read their
+//! operands, the contiguous host slice of a storage
 //! in the forward pass, and a tensor as `f64` values in the backward pass (every backward pass
 //! computes in `f64`; `f32 → f64` is exact and keeps the order of values).
 
@@ -20,4 +21,34 @@ pub(super) fn contiguous<'a, T>(
 /// Every value of `tensor`, row-major, as `f64`.
 pub(super) fn host_f64(tensor: &Tensor) -> candle_core::Result<Vec<f64>> {
     tensor.to_dtype(DType::F64)?.flatten_all()?.to_vec1()
+}
+
+/// The arithmetic the operations need of both float widths they run in (`f32`, `f64`).
+pub(super) trait Real:
+    Copy
+    + Send
+    + Sync
+    + PartialOrd
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::AddAssign
+{
+    const ZERO: Self;
+    fn from_count(n: usize) -> Self;
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    fn from_count(n: usize) -> Self {
+        n as f32
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    fn from_count(n: usize) -> Self {
+        n as f64
+    }
 }

@@ -11,7 +11,7 @@ use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 use super::incoming_links::IncomingLinks;
-use super::op_operands::{contiguous, host_f64};
+use super::op_operands::{Real, contiguous, host_f64};
 
 /// The name in error messages.
 const NAME: &str = "slot dot products";
@@ -60,12 +60,9 @@ impl SlotDotProducts {
     }
 }
 
-fn forward<T>(query: &[T], key: &[T], slots: &[u32], width: usize, h: usize) -> Vec<T>
-where
-    T: Copy + Send + Sync + Default + std::ops::Add<Output = T> + std::ops::Mul<Output = T>,
-{
+fn forward<T: Real>(query: &[T], key: &[T], slots: &[u32], width: usize, h: usize) -> Vec<T> {
     let n = key.len() / h.max(1);
-    let mut out = vec![T::default(); n * width];
+    let mut out = vec![T::ZERO; n * width];
     if h == 0 || width == 0 {
         return out;
     }
@@ -79,10 +76,7 @@ where
                     let j = j as usize;
                     if j < n {
                         let q = &query[j * h..(j + 1) * h];
-                        *o = q
-                            .iter()
-                            .zip(k)
-                            .fold(T::default(), |sum, (&a, &b)| sum + a * b);
+                        *o = q.iter().zip(k).fold(T::ZERO, |sum, (&a, &b)| sum + a * b);
                     }
                 }
             }
