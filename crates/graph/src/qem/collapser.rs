@@ -138,8 +138,8 @@ pub(crate) struct Collapser {
     /// The next vertex at the same position (a UV seam's twins, cyclic; itself elsewhere).
     pub twin: Vec<u32>,
     welded: bool,
-    /// The setup's edges, scored in the first pass.
-    pub initial_edges: Vec<(u32, u32)>,
+    /// The setup's edges, in chunks of vertices, scored in the first pass.
+    pub initial_edges: Vec<Vec<(u32, u32)>>,
     scratch_faces: Vec<u32>,
     pub max_cost: f64,
     pub max_error: f64,
@@ -242,33 +242,46 @@ impl Collapser {
         }
         let live = |f: &&u32| faces[**f as usize][0] != DEAD;
 
-        // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics and
-        // the sum of the face area normals. (Face planes are recomputed per incident vertex
-        // rather than stored: 3× the arithmetic, but no per-face array at the memory peak.)
-        let face_normal = |f: u32| {
-            let [p0, p1, p2] = faces[f as usize].map(|v| positions[v as usize]);
+        // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics, and
+        // the vertex record with the sum of the face area normals (flags follow below).
+        // (Face planes are recomputed per incident vertex rather than stored: 3× the
+        // arithmetic, but no per-face array at the memory peak.)
+        let face_normal = |f: u32, position: &dyn Fn(u32) -> [f64; 3]| {
+            let [p0, p1, p2] = faces[f as usize].map(position);
             (cross(sub(p1, p0), sub(p2, p0)), p0)
         };
-        let (mut quadrics, region): (Vec<Quadric>, Vec<[f64; 3]>) = (0..n)
+        let (mut quadrics, mut verts): (Vec<Quadric>, Vec<VertexRecord>) = (0..n)
             .into_par_iter()
             .map(|v| {
                 let (start, len) = links[v];
-                refs[start as usize..(start + len) as usize]
+                let (quadric, region) = refs[start as usize..(start + len) as usize]
                     .iter()
                     .filter(live)
                     .fold((Quadric::default(), [0.0; 3]), |(q, s), &f| {
-                        let (normal, point) = face_normal(f);
+                        let (normal, point) = face_normal(f, &|u| positions[u as usize]);
                         let plane =
                             Quadric::from_plane(normal, point, 0.5 * dot(normal, normal).sqrt());
                         (q + plane, std::array::from_fn(|k| s[k] + normal[k]))
-                    })
+                    });
+                let record = VertexRecord {
+                    position: positions[v].map(|x| x as f32),
+                    region_normal: region.map(|x| x as f32),
+                    start,
+                    meta: len << FLAG_BITS | if welding.seam[v] { LOCKED } else { 0 },
+                };
+                (quadric, record)
             })
             .unzip();
+        // From here on positions are read from the records (the same f32 values).
+        drop(positions);
+        drop(links);
+        let position = |v: u32| verts[v as usize].point();
 
         // Undirected edges `(a < b)`, enumerated per vertex from the incidence lists (parallel,
         // no global sort), in chunks of vertices with one scratch list each: the collapsible
         // edges, and apart the boundary and non-manifold ones as
-        // `(a, b, face count, first face)`.
+        // `(a, b, face count, first face)`. The chunks are kept as they are, not concatenated:
+        // a second copy of every edge would sit at the decimation's memory peak.
         type Special = (u32, u32, u32, u32);
         type EdgeChunk = (Vec<(u32, u32)>, Vec<Special>);
         let chunks: Vec<EdgeChunk> = (0..n.div_ceil(EDGE_CHUNK))
@@ -279,12 +292,8 @@ impl Collapser {
                 let mut special = Vec::new();
                 let mut local: Vec<(u32, u32)> = Vec::new();
                 for a in vertices {
-                    let (start, len) = links[a];
                     local.clear();
-                    for &f in refs[start as usize..(start + len) as usize]
-                        .iter()
-                        .filter(live)
-                    {
+                    for &f in refs[verts[a].incident()].iter().filter(live) {
                         for x in faces[f as usize] {
                             if x as usize > a {
                                 local.push((x, f));
@@ -309,11 +318,6 @@ impl Collapser {
                 (edges, special)
             })
             .collect();
-        let mut flags: Vec<u32> = welding
-            .seam
-            .iter()
-            .map(|&s| if s { LOCKED } else { 0 })
-            .collect();
         // A seam vertex stands for the whole surface around its position: the face planes of
         // its twins' charts join its quadric (equal for all twins, and kept equal since twins
         // collapse together).
@@ -325,41 +329,32 @@ impl Collapser {
                 }
             }
         }
+        let mut flags: Vec<(u32, u32)> = Vec::new();
         for &(a, b, count, f) in chunks.iter().flat_map(|(_, special)| special) {
             if count == 1 {
-                flags[a as usize] |= BOUNDARY;
-                flags[b as usize] |= BOUNDARY;
+                flags.push((a, BOUNDARY));
+                flags.push((b, BOUNDARY));
                 // A seam is no border of the surface: no border plane along it.
                 if welding.seam[a as usize] && welding.seam[b as usize] {
                     continue;
                 }
-                let (normal, _) = face_normal(f);
-                let (pa, pb) = (positions[a as usize], positions[b as usize]);
+                let (normal, _) = face_normal(f, &position);
+                let (pa, pb) = (position(a), position(b));
                 let e = sub(pb, pa);
                 let w = options.boundary_weight * dot(e, e);
                 let q = Quadric::from_plane(cross(e, normal), pa, w);
                 quadrics[a as usize] += q;
                 quadrics[b as usize] += q;
             } else {
-                flags[a as usize] |= NON_MANIFOLD;
-                flags[b as usize] |= NON_MANIFOLD;
+                flags.push((a, NON_MANIFOLD));
+                flags.push((b, NON_MANIFOLD));
             }
         }
-        let mut edges: Vec<(u32, u32)> =
-            Vec::with_capacity(chunks.iter().map(|(e, _)| e.len()).sum());
-        for (chunk, _) in chunks {
-            edges.extend_from_slice(&chunk);
+        for (v, flag) in flags {
+            verts[v as usize].meta |= flag;
         }
+        let edges = chunks.into_iter().map(|(edges, _)| edges).collect();
 
-        let verts = (0..n)
-            .into_par_iter()
-            .map(|v| VertexRecord {
-                position: positions[v].map(|x| x as f32),
-                region_normal: region[v].map(|x| x as f32),
-                start: links[v].0,
-                meta: links[v].1 << FLAG_BITS | flags[v],
-            })
-            .collect();
         let live_faces = faces.len() - repeats.len();
         Ok(Self {
             verts,

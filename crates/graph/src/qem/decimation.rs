@@ -278,8 +278,7 @@ fn run(
     let mut bounded = true;
     let mut pass = 0u32;
     let initial_edges = std::mem::take(&mut state.initial_edges);
-    let mut candidates = score(state, &initial_edges);
-    drop(initial_edges);
+    let mut candidates = score(state, initial_edges);
     let n = state.verts.len();
     // Vertices changed (survivors) or removed in this pass; those changed in this batch.
     let mut changed = VertexBits::new(n);
@@ -386,23 +385,32 @@ fn run(
     }
 }
 
-/// The collapsible edges of `edges` with their cost keys, scored in parallel (the far
-/// endpoints' records and quadrics warmed per chunk of 64 edges), sorted by key (ties in the
-/// order of `edges`).
-fn score(state: &Collapser, edges: &[(u32, u32)]) -> Vec<Candidate> {
-    let mut candidates: Vec<Candidate> = edges
-        .par_chunks(64)
-        .flat_map_iter(|chunk| {
-            state.warm_records(chunk.iter().map(|&(_, b)| b));
-            chunk.iter().filter_map(|&(a, b)| {
-                state.placement(a, b).map(|p| Candidate {
-                    key: cost_key(p.cost),
-                    a,
-                    b,
-                })
-            })
+/// The collapsible edges of `edges` (chunks, in order) with their cost keys, scored in
+/// parallel (the far endpoints' records and quadrics warmed per 64 edges), sorted by key (ties
+/// in the order of `edges`). Each chunk of edges is freed once scored, and all of them before
+/// the sort: the first sort is the decimation's memory peak.
+fn score(state: &Collapser, edges: Vec<Vec<(u32, u32)>>) -> Vec<Candidate> {
+    let scored: Vec<Vec<Candidate>> = edges
+        .into_par_iter()
+        .map(|chunk| {
+            let mut out = Vec::with_capacity(chunk.len());
+            for group in chunk.chunks(64) {
+                state.warm_records(group.iter().map(|&(_, b)| b));
+                out.extend(group.iter().filter_map(|&(a, b)| {
+                    state.placement(a, b).map(|p| Candidate {
+                        key: cost_key(p.cost),
+                        a,
+                        b,
+                    })
+                }));
+            }
+            out
         })
         .collect();
+    let mut candidates = Vec::with_capacity(scored.iter().map(Vec::len).sum());
+    for chunk in scored {
+        candidates.extend_from_slice(&chunk);
+    }
     radix_sort(&mut candidates);
     candidates
 }

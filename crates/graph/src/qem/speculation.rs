@@ -185,6 +185,7 @@ mod tests {
         let mut state = Collapser::new(&mesh, &DecimationOptions::default()).unwrap();
         let batch = std::mem::take(&mut state.initial_edges)
             .into_iter()
+            .flatten()
             .map(|(a, b)| Candidate { key: 0, a, b })
             .collect();
         (state, batch)
