@@ -31,7 +31,7 @@
 //! one more solve damps it by `|λ − σ| / |λ_high − σ|`. It brings the worst residual
 //! `‖Lx − λMx‖ / ‖Mx‖` of 150 pairs of a real scan from 2.4e-4 λ_max (the earlier solver,
 //! converged to 1e-9) to 2.2e-7 λ_max, and the eigenvalues agree with the unrefined ones and
-//! scipy's to about 1e-12. Memory is `#V × O(k)`, never `#V²`. The dense products run on fixed
+//! scipy's to 2e-11 or better. Memory is `#V × O(k)`, never `#V²`. The dense products run on fixed
 //! blocks of rows and the solves on fixed groups of columns, in parallel, each sequential inside
 //! (`row_chunked_products`, `sparse_cholesky`): faer's finer-grained parallel kernels made the
 //! solver 2-3× slower than one thread on a 2-core machine (docs/geometry.md), and fixed blocks
