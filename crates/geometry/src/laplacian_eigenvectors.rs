@@ -327,7 +327,8 @@ fn shift_invert_subspace(
             return Err(Error::Solver {
                 solver: "laplacian eigenvectors",
                 message: format!(
-                    "the shift σ = {sigma:e} has {negative} eigenvalues below it, the pairs found {below}"
+                    "the shift σ = {sigma:e} has {negative} eigenvalues below it, the pairs \
+                     found {below}"
                 ),
             });
         }
