@@ -190,7 +190,8 @@ fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_waterti
         summary["wa"].as_f64().unwrap(),
     );
     assert!((0.0..=100.0).contains(&wa_raw) && (0.0..=100.0).contains(&wa));
-    // Seeded: the same run writes the same bytes; hole filling only adds faces.
+    // Seeded: the same run writes the same bytes; hole filling only adds (faces, and a vertex
+    // for a hole no triangulation of its own corners closes).
     assert_eq!(run("b.ply", &[]).2, bytes);
     let (filled, filled_mesh, _) = run("c.ply", &["--fill-holes"]);
     assert!(

@@ -6,9 +6,11 @@
 //! The new faces run every loop edge against its face, so an oriented mesh stays oriented; a
 //! diagonal that is already an edge of the mesh (or of a hole filled before) is never used, so
 //! an edge-manifold mesh stays edge-manifold. A loop that passes a vertex twice (two holes
-//! meeting at a vertex) is split there into simple loops, each filled on its own. A chain
-//! that does not close, or a loop with no triangulation under those rules (every diagonal
-//! already an edge, as across a fold), is left open.
+//! meeting at a vertex) is split there into simple loops, each filled on its own. A loop with
+//! no triangulation of its own vertices under those rules (every diagonal already an edge, as
+//! across a fold) gets one new vertex at the mean of its corners and a fan of triangles to
+//! it, whose new edges cannot exist yet (Liepa's method adds vertices to every patch; this
+//! adds one only where nothing else closes the hole). A chain that does not close is left open.
 
 use std::collections::{HashMap, HashSet};
 
@@ -22,7 +24,8 @@ use crate::{TriMesh, boundary_loops::boundary_loops_in};
 pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
 
 /// `mesh` with every boundary loop of 3 to `max_edges` edges closed (module docs); the
-/// vertices are kept, the new faces follow the old ones. Errors when `max_edges` exceeds
+/// vertices are kept (a loop with no triangulation of its own corners adds one after them),
+/// the new faces follow the old ones. Errors when `max_edges` exceeds
 /// [`MAX_FILLED_HOLE_EDGES`].
 ///
 /// ```
@@ -58,6 +61,7 @@ pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
         })
         .collect();
     let mut faces = mesh.triangles().to_vec();
+    let mut vertices = mesh.vertices().to_vec();
     let loops = boundary_loops_in(&topology);
     for hole in loops.iter().flat_map(|hole| simple_loops(hole)) {
         let k = hole.len();
@@ -65,14 +69,30 @@ pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
         if !(3..=max_edges).contains(&k) || !closes {
             continue;
         }
-        if let Some(patch) = least_area_triangulation(mesh.vertices(), &hole, &edges) {
-            for &[a, b, c] in &patch {
-                edges.extend([key(a, b), key(b, c), key(c, a)]);
-            }
-            faces.extend(patch);
+        let patch = least_area_triangulation(&vertices, &hole, &edges)
+            .unwrap_or_else(|| centre_fan(&mut vertices, &hole));
+        for &[a, b, c] in &patch {
+            edges.extend([key(a, b), key(b, c), key(c, a)]);
         }
+        faces.extend(patch);
     }
-    TriMesh::new(mesh.vertices().to_vec(), faces)
+    TriMesh::new(vertices, faces)
+}
+
+/// A new vertex at the mean of the corners of the closed polygon `hole`, appended to
+/// `vertices`, and the fan of triangles from it, each running its polygon side backwards
+/// (like [`least_area_triangulation`]'s).
+fn centre_fan(vertices: &mut Vec<[f32; 3]>, hole: &[u32]) -> Vec<[u32; 3]> {
+    let k = hole.len();
+    let sum = hole.iter().fold([0.0f64; 3], |s, &v| {
+        let p = vertices[v as usize];
+        std::array::from_fn(|i| s[i] + f64::from(p[i]))
+    });
+    let centre = vertices.len() as u32;
+    vertices.push(sum.map(|x| (x / k as f64) as f32));
+    (0..k)
+        .map(|i| [hole[(i + 1) % k], hole[i], centre])
+        .collect()
 }
 
 /// The closed walk `hole` cut into simple loops at every vertex it passes twice, each in the
@@ -269,6 +289,51 @@ mod tests {
         // With both, no triangulation exists.
         let both = HashSet::from([(1, 3), (0, 2)]);
         assert!(least_area_triangulation(&v, &[0, 1, 2, 3], &both).is_none());
+    }
+
+    #[test]
+    fn a_hole_whose_diagonals_are_both_edges_closes_with_a_centre_vertex() {
+        // A tetrahedron 0-1-2-3 without the two faces on (0, 2): the hole 0-1-2-3 has (1, 3)
+        // as an inner edge; a second tetrahedron 0-2-4-5 holds (0, 2). No triangulation of
+        // the four corners avoids both.
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 0.9, 0.0],
+            [0.5, 0.3, 0.8],
+            [-0.5, 0.5, -0.5],
+            [0.2, 0.6, -0.9],
+        ];
+        let faces = vec![
+            [0, 3, 1],
+            [1, 3, 2],
+            [0, 2, 4],
+            [0, 5, 2],
+            [0, 4, 5],
+            [2, 5, 4],
+        ];
+        let open = TriMesh::new(v.clone(), faces).unwrap();
+        assert!(is_edge_manifold(&open));
+        assert_eq!(boundary_loops(&open).len(), 1);
+        let closed = fill_holes(&open, 30).unwrap();
+        assert!(is_watertight(&closed) && is_edge_manifold(&closed));
+        assert_eq!(closed.vertex_count(), v.len() + 1);
+        assert_eq!(closed.face_count(), open.face_count() + 4);
+        let centre = closed.vertices()[v.len()];
+        for (i, c) in centre.iter().enumerate() {
+            let mean = (0..4).map(|k| v[k][i]).sum::<f32>() / 4.0;
+            assert!((c - mean).abs() < 1e-6);
+        }
+        // Every new face has the centre and a side of the hole, run against its old face.
+        for f in open.face_count()..closed.face_count() {
+            let [a, b, c] = closed.triangles()[f];
+            assert_eq!(c as usize, v.len());
+            assert!(
+                open.triangles()
+                    .iter()
+                    .any(|t| { (0..3).any(|i| t[i] == b && t[(i + 1) % 3] == a) })
+            );
+        }
     }
 
     #[test]

@@ -112,7 +112,9 @@ pub struct SimplifierPass {
 pub struct NeuralSimplification {
     /// The output mesh, in the input's units.
     pub mesh: TriMesh,
-    /// Index in the input of every output vertex.
+    /// Index in the input of every selected output vertex: the first `vertex_map.len()`
+    /// vertices of `mesh`. Hole filling may add one vertex after them per hole that no
+    /// triangulation of its own corners closes ([`meshgnn_geometry::fill_holes`]).
     pub vertex_map: Vec<u32>,
     /// Faces with `p_t > 0.5` before the manifold pass.
     pub raw_faces: usize,
