@@ -144,12 +144,14 @@ pub fn laplacian_eigenvectors(mesh: &TriMesh, k: usize) -> Result<LaplacianEigen
     candidates.truncate(k);
     let mut vectors = Mat::<f64>::zeros(mesh.vertex_count(), k);
     let mut values = Vec::with_capacity(k);
+    // x = M^{-1/2} y.
+    let inverse_sqrt_mass: Vec<f64> = mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     for (column, &(value, c, i)) in candidates.iter().enumerate() {
         values.push(value);
         let local = solutions[c].1.col(i);
         let mut out = vectors.col_mut(column);
         for (row, &v) in components[c].iter().enumerate() {
-            out[v] = local[row] / mass[v].sqrt();
+            out[v] = local[row] * inverse_sqrt_mass[v];
         }
         // Sign convention: largest-magnitude entry positive.
         let mut best = (0usize, 0.0f64);
