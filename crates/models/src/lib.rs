@@ -15,6 +15,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod adam;
+mod allocator_policy;
 mod checkpoint;
 mod count_bounds;
 mod error;
@@ -29,6 +30,7 @@ pub mod pretrained;
 pub mod training;
 
 pub use adam::{Adam, AdamConfig, sorted_vars};
+pub use allocator_policy::reuse_freed_memory;
 pub use checkpoint::{
     CHECKPOINT_FORMAT, Checkpoint, CheckpointHeader, LoadCheckpoint, OPTIMIZER_PREFIX,
     TrainingState,
