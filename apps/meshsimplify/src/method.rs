@@ -71,7 +71,8 @@ pub enum Simplifier {
 
 impl Simplifier {
     /// `method` aiming at `target`: checks that every option given belongs to it and loads
-    /// its weights.
+    /// its weights; for a learned method, freed memory is kept in the process from then on
+    /// (`meshgnn_models::reuse_freed_memory`).
     pub fn new(method: Method, target: Target, options: &MethodOptions) -> Result<Self> {
         let only = |given: bool, option: &str, methods: &str| {
             if given {
@@ -107,6 +108,7 @@ impl Simplifier {
                         meshgnn_geometry::MAX_FILLED_HOLE_EDGES
                     );
                 }
+                meshgnn_models::reuse_freed_memory();
                 let model =
                     NeuralMeshSimplifier::load_or_bundled(options.weights).with_context(|| {
                         match options.weights {
@@ -124,6 +126,7 @@ impl Simplifier {
                 })
             }
             Method::PcRemesh => {
+                meshgnn_models::reuse_freed_memory();
                 let model = SelectionModel::for_method(SelectionMethod::Neural, options.weights)
                     .with_context(|| match options.weights {
                         Some(path) => {

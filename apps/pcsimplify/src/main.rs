@@ -36,7 +36,6 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    meshgnn_models::reuse_freed_memory();
     let cli = Cli::parse();
     if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
         eprintln!("pcsimplify: installing the interrupt handler: {error}");

@@ -12,15 +12,20 @@ pub use meshgnn_models::point_selection::{Selection, SelectionMethod as Method, 
 use crate::input::Input;
 
 /// The trained model `method` reads: `--weights FILE` or the bundled weights; none for the
-/// classical methods.
+/// classical methods. A learned method's tensors are then served from freed memory kept in
+/// the process (`meshgnn_models::reuse_freed_memory`).
 pub fn load_model(method: Method, weights: Option<&Path>) -> Result<Option<SelectionModel>> {
-    SelectionModel::for_method(method, weights).with_context(|| match weights {
+    let model = SelectionModel::for_method(method, weights).with_context(|| match weights {
         Some(path) => format!("loading the {} weights {}", method.name(), path.display()),
         None => format!(
             "loading the bundled {} weights (pass --weights FILE, or choose another --method)",
             method.name()
         ),
-    })
+    })?;
+    if model.is_some() {
+        meshgnn_models::reuse_freed_memory();
+    }
+    Ok(model)
 }
 
 /// Runs `method` on `input` to keep exactly `count` points (`point_selection::select`).
