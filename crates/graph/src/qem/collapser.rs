@@ -246,10 +246,7 @@ impl Collapser {
         // the vertex record with the sum of the face area normals (flags follow below).
         // (Face planes are recomputed per incident vertex rather than stored: 3× the
         // arithmetic, but no per-face array at the memory peak.)
-        let face_normal = |f: u32, position: &dyn Fn(u32) -> [f64; 3]| {
-            let [p0, p1, p2] = faces[f as usize].map(position);
-            (cross(sub(p1, p0), sub(p2, p0)), p0)
-        };
+        let corner_normal = |[p0, p1, p2]: [[f64; 3]; 3]| (cross(sub(p1, p0), sub(p2, p0)), p0);
         let (mut quadrics, mut verts): (Vec<Quadric>, Vec<VertexRecord>) = (0..n)
             .into_par_iter()
             .map(|v| {
@@ -258,7 +255,8 @@ impl Collapser {
                     .iter()
                     .filter(live)
                     .fold((Quadric::default(), [0.0; 3]), |(q, s), &f| {
-                        let (normal, point) = face_normal(f, &|u| positions[u as usize]);
+                        let corners = faces[f as usize].map(|u| positions[u as usize]);
+                        let (normal, point) = corner_normal(corners);
                         let plane =
                             Quadric::from_plane(normal, point, 0.5 * dot(normal, normal).sqrt());
                         (q + plane, std::array::from_fn(|k| s[k] + normal[k]))
@@ -338,7 +336,7 @@ impl Collapser {
                 if welding.seam[a as usize] && welding.seam[b as usize] {
                     continue;
                 }
-                let (normal, _) = face_normal(f, &position);
+                let (normal, _) = corner_normal(faces[f as usize].map(position));
                 let (pa, pb) = (position(a), position(b));
                 let e = sub(pb, pa);
                 let w = options.boundary_weight * dot(e, e);
