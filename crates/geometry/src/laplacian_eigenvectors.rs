@@ -63,6 +63,7 @@ use faer::{Mat, MatRef, Side};
 use petgraph::unionfind::UnionFind;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
 
 use crate::TriMesh;
 use crate::cotangent_laplacian::cotangent_laplacian;
@@ -411,7 +412,6 @@ fn scaled_laplacian_product(
     sqrt_mass: &[f64],
     z: &Mat<f64>,
 ) -> Mat<f64> {
-    use rayon::prelude::*;
     const GROUP: usize = 8;
     let n = sqrt_mass.len();
     let mut column_start = vec![0usize; n + 1];
@@ -821,30 +821,10 @@ mod tests {
     #[test]
     fn lanczos_matches_the_dense_solution() {
         // 642 vertices: above the dense limit, so the Lanczos path runs.
-        let sphere = icosphere(3);
-        let bumped: Vec<[f32; 3]> = sphere
-            .vertices()
-            .iter()
-            .map(|p| {
-                let r = 1.0 + 0.2 * (3.0 * p[0]).sin() * (2.0 * p[1]).cos();
-                p.map(|x| x * r)
-            })
-            .collect();
-        let mesh = sphere.with_vertices(bumped).unwrap();
+        let mesh = bumpy_sphere();
         let k = 40;
         let pairs = laplacian_eigenvectors(&mesh, k).unwrap();
-        let l = cotangent_laplacian(&mesh).unwrap();
-        let m = lumped_mass_matrix(&mesh);
-        let entries: Vec<Triplet<usize, usize, f64>> = (0..l.ncols())
-            .flat_map(|c| {
-                let rows = l.symbolic().row_idx_of_col_raw(c).to_vec();
-                let vals = l.val_of_col(c).to_vec();
-                rows.into_iter()
-                    .zip(vals)
-                    .map(move |(r, v)| Triplet::new(r, c, v))
-            })
-            .collect();
-        let sqrt_mass: Vec<f64> = m.iter().map(|x| x.sqrt()).collect();
+        let (entries, sqrt_mass) = entries_and_sqrt_mass(&mesh);
         let (dense, _) = dense_eigenpairs(&entries, &sqrt_mass, k).unwrap();
         for (a, b) in pairs.values.iter().zip(&dense) {
             assert!((a - b).abs() < 1e-8 * b.max(1.0), "{a} vs {b}");

@@ -140,15 +140,14 @@ impl SparseCholesky {
         let col_ptr = simplicial.col_ptr();
         let row_idx = simplicial.row_idx();
         let values = &self.values;
-        let fwd: Vec<usize> = match self.symbolic.perm() {
-            Some(perm) => perm.arrays().0.to_vec(),
-            None => (0..n).collect(),
-        };
+        // Row `p` of the permuted system is row `fwd[p]` of the matrix.
+        let perm = self.symbolic.perm();
+        let fwd = |p: usize| perm.map_or(p, |perm| perm.arrays().0[p]);
         let mut x = vec![[0.0f64; COLUMNS_PER_TASK]; n];
         for c in 0..width {
             let column = rhs.as_ref().col(c);
-            for (row, &from) in x.iter_mut().zip(&fwd) {
-                row[c] = column[from];
+            for (p, row) in x.iter_mut().enumerate() {
+                row[c] = column[fwd(p)];
             }
         }
         let unit_diagonal = self.negative_pivots.is_some();
@@ -201,8 +200,8 @@ impl SparseCholesky {
         }
         for c in 0..width {
             let mut column = rhs.as_mut().col_mut(c);
-            for (row, &to) in x.iter().zip(&fwd) {
-                column[to] = row[c];
+            for (p, row) in x.iter().enumerate() {
+                column[fwd(p)] = row[c];
             }
         }
     }
