@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use meshgnn_graph::{DecimationOptions, Target, decimate};
-use meshgnn_models::mesh_simplifier::NeuralMeshSimplifier;
+use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -16,16 +16,18 @@ use crate::errors::value_error;
 use crate::mesh_io::{mesh_out, surface_mesh_in};
 
 /// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None, seed=0,
-/// weights=None, fill_holes=None, return_vertex_map=False, return_info=False) -> (V', F'[,
+/// weights=None, fill_holes=None, keep_positions=False, return_vertex_map=False,
+/// return_info=False) -> (V', F'[,
 /// vertex_map][, info])`: exactly one of `ratio` (of the faces, in (0, 1]) and `faces` (a count
 /// in 1..=m). `vertex_map[i]` is the output vertex input vertex `i` was merged into (QEM) or
 /// kept as (neural; -1 for a vertex not kept); `info` holds the keys of `meshsimplify simplify
 /// --json` (`input_faces`, `output_faces`, `error`, `stop_reason`, and `collapses` for QEM,
 /// `wa_raw`, `wa`, `holes` for neural). `max_error` is QEM's; `seed`, `weights` (a checkpoint
-/// instead of the bundled weights) and `fill_holes` (close holes of at most that many edges)
-/// the neural method's.
+/// instead of the bundled weights), `fill_holes` (close holes of at most that many edges) and
+/// `keep_positions` (leave the selected vertices where the network picked them instead of at
+/// their regions' quadric optima) the neural method's.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, seed=0, weights=None, fill_holes=None, return_vertex_map=false, return_info=false))]
+#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, seed=0, weights=None, fill_holes=None, keep_positions=false, return_vertex_map=false, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn simplify<'py>(
     py: Python<'py>,
@@ -38,6 +40,7 @@ pub fn simplify<'py>(
     seed: u64,
     weights: Option<PathBuf>,
     fill_holes: Option<usize>,
+    keep_positions: bool,
     return_vertex_map: bool,
     return_info: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
@@ -66,6 +69,7 @@ pub fn simplify<'py>(
         refuse(seed != 0, "seed")?;
         refuse(weights.is_some(), "weights")?;
         refuse(fill_holes.is_some(), "fill_holes")?;
+        refuse(keep_positions, "keep_positions")?;
     }
     if let Some(e) = max_error
         && !(e >= 0.0 && e.is_finite())
@@ -93,7 +97,10 @@ pub fn simplify<'py>(
                     &mesh,
                     &target,
                     seed,
-                    fill_holes,
+                    &NeuralSimplifyOptions {
+                        fill_holes_up_to: fill_holes,
+                        keep_positions,
+                    },
                     &mut |_| {},
                 )
             })

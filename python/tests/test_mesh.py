@@ -73,16 +73,26 @@ def test_neural_simplify_matches_the_command_line_tool(tmp_path, creature_path, 
     V_cli, F_cli = meshgnn.read_mesh(out)
     np.testing.assert_array_equal(F2, F_cli)
     np.testing.assert_array_equal(V2, V_cli)
-    # The neural method selects: each kept vertex is an input vertex, the rest map to -1.
-    # Hole filling may add a vertex after the kept ones for a hole no triangulation of its
-    # corners closes, the centre of a fan of at least three faces.
+    # The neural method selects: each kept input vertex maps to its output vertex, the rest
+    # to -1. Hole filling may add a vertex after the kept ones for a hole no triangulation of
+    # its corners closes, the centre of a fan of at least three faces.
     kept = np.flatnonzero(vertex_map >= 0)
     assert len(kept) == round(0.05 * len(V)) <= len(V2)
     assert vertex_map[kept].max() == len(kept) - 1
-    np.testing.assert_array_equal(V2[vertex_map[kept]], V[kept])
     assert (vertex_map[vertex_map < 0] == -1).all()
     added = np.arange(len(kept), len(V2))
     assert all((F2 == v).any(axis=1).sum() >= 3 for v in added)
+    # By default the kept vertices move to their regions' quadric optima, a small step;
+    # keep_positions leaves them at the input vertices, with the same faces.
+    V3, F3, map3 = meshgnn.simplify(
+        V, F, ratio=0.05, method="neural", seed=2, fill_holes=30, keep_positions=True,
+        return_vertex_map=True,
+    )
+    np.testing.assert_array_equal(map3, vertex_map)
+    np.testing.assert_array_equal(V3[vertex_map[kept]], V[kept])
+    step = np.linalg.norm(V2[vertex_map[kept]] - V[kept], axis=1)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    assert (step > 0).mean() > 0.5 and step.max() < 0.05 * diagonal
 
 
 def test_neural_simplify_refuses_small_meshes(icosphere_path):
@@ -138,6 +148,7 @@ def test_simplify_rejects_bad_arrays_with_one_line(icosphere_path, change, messa
         ({"ratio": 0.5, "max_error": -1.0}, "max_error=-1"),
         ({"ratio": 0.5, "seed": 3}, 'seed= applies to method="neural" only'),
         ({"ratio": 0.5, "fill_holes": 30}, 'fill_holes= applies to method="neural" only'),
+        ({"ratio": 0.5, "keep_positions": True}, 'keep_positions= applies to method="neural" only'),
         ({"ratio": 0.5, "method": "neural", "max_error": 1.0}, 'applies to method="qem" only'),
         ({"ratio": 0.5, "method": "neural", "fill_holes": 5000}, "fill_holes=5000"),
         ({"ratio": 0.5, "method": "neural", "weights": "missing.safetensors"}, "missing.safetensors"),

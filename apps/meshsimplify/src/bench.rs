@@ -1,5 +1,6 @@
 //! `meshsimplify bench DIR [--ratios 0.05,0.1,0.2,0.5] [--methods neural,qem,pc+remesh]
-//! [--samples 50000] [--seed S] [--neural-weights FILE] [--json] [--json-out FILE]`: every
+//! [--samples 50000] [--seed S] [--neural-weights FILE] [--keep-positions] [--json]
+//! [--json-out FILE]`: every
 //! method at every ratio on every mesh of a folder, scored like `meshsimplify eval` and printed
 //! in the layout of thesis Table 6.1 (CD, WA, LE, NE and seconds per mesh, means over files).
 //!
@@ -42,6 +43,10 @@ pub struct BenchArgs {
     /// Weights of the neural simplifier from a training run (default: the bundled ones).
     #[arg(long)]
     pub neural_weights: Option<PathBuf>,
+    /// The neural method leaves its selected vertices at their input positions (the thesis'
+    /// output) instead of placing them.
+    #[arg(long)]
+    pub keep_positions: bool,
     /// Print one JSON object instead of Markdown.
     #[arg(long)]
     pub json: bool,
@@ -104,6 +109,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     .neural_weights
                     .as_deref()
                     .filter(|_| method == Method::Neural),
+                keep_positions: args.keep_positions && method == Method::Neural,
                 seed: args.seed,
                 ..Default::default()
             };

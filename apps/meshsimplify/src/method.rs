@@ -11,7 +11,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation, vertex_normals};
 use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
-use meshgnn_models::mesh_simplifier::NeuralMeshSimplifier;
+use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
 use meshgnn_models::point_selection::{SelectionInput, SelectionMethod, SelectionModel, select};
 use serde_json::{Value, json};
 
@@ -47,6 +47,8 @@ pub struct MethodOptions<'a> {
     pub max_error: Option<f64>,
     /// Neural: close the holes of at most this many edges.
     pub fill_holes: Option<usize>,
+    /// Neural: leave the selected vertices at their input positions (no quadric placement).
+    pub keep_positions: bool,
     /// Neural or pc+remesh: weights from a training run instead of the bundled ones.
     pub weights: Option<&'a Path>,
     /// Neural or pc+remesh: seed of their random draws.
@@ -60,7 +62,7 @@ pub enum Simplifier {
         model: Box<NeuralMeshSimplifier>,
         target: Target,
         seed: u64,
-        fill_holes: Option<usize>,
+        options: NeuralSimplifyOptions,
     },
     PcRemesh {
         model: Box<SelectionModel>,
@@ -85,6 +87,7 @@ impl Simplifier {
         }
         if method != Method::Neural {
             only(options.fill_holes.is_some(), "--fill-holes", "neural")?;
+            only(options.keep_positions, "--keep-positions", "neural")?;
         }
         match method {
             Method::Qem => {
@@ -122,7 +125,10 @@ impl Simplifier {
                     model: Box::new(model),
                     target,
                     seed: options.seed,
-                    fill_holes: options.fill_holes,
+                    options: NeuralSimplifyOptions {
+                        fill_holes_up_to: options.fill_holes,
+                        keep_positions: options.keep_positions,
+                    },
                 })
             }
             Method::PcRemesh => {
@@ -193,9 +199,9 @@ impl Simplifier {
                 model,
                 target,
                 seed,
-                fill_holes,
+                options,
             } => {
-                let result = model.simplify_to(mesh, target, *seed, *fill_holes, progress)?;
+                let result = model.simplify_to(mesh, target, *seed, options, progress)?;
                 let watertightness = Watertightness {
                     wa_raw: result.wa_raw,
                     wa: result.wa,

@@ -1,6 +1,6 @@
 //! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem|neural|pc+remesh]
-//! [--max-error E] [--weights FILE] [--fill-holes [K]] [--seed S] [--preview PNG [--wireframe]]
-//! [--force] [--json]`: simplify a mesh file to a target size, or every mesh file of a folder
+//! [--max-error E] [--weights FILE] [--fill-holes [K]] [--keep-positions] [--seed S]
+//! [--preview PNG [--wireframe]] [--force] [--json]`: simplify a mesh file to a target size, or every mesh file of a folder
 //! IN into the folder OUT (same names; files in parallel; a failed file never stops the
 //! others, and the exit code says whether any failed).
 //!
@@ -14,7 +14,9 @@
 //! ch. 6 and `pc+remesh` the ch. 5 route (the bundled weights of each, or `--weights FILE`
 //! from a training run); both select vertices, so the target becomes a vertex count.
 //! `--fill-holes [K]` closes the holes of at most `K` edges (default 30) after the neural
-//! method's manifold pass.
+//! method's manifold pass. The neural method moves each selected vertex to the quadric optimum
+//! of the input region it stands for (`meshgnn_graph::region_quadric_placement`);
+//! `--keep-positions` leaves them where the network picked them (the thesis' output).
 //!
 //! `--preview PNG` (one file only) renders the input and the result side by side, shaded, with
 //! the project's own rasteriser (`meshgnn_data::contact_sheet`), `--wireframe` drawing edges.
@@ -70,6 +72,10 @@ pub struct SimplifyArgs {
     /// Close the holes of at most K boundary edges left after the manifold pass (neural only).
     #[arg(long, value_name = "K", num_args = 0..=1, default_missing_value = "30")]
     pub fill_holes: Option<usize>,
+    /// Leave the selected vertices at their input positions instead of moving each to its
+    /// region's quadric optimum (neural only).
+    #[arg(long)]
+    pub keep_positions: bool,
     /// Seed for the selecting methods' random draws (QEM is deterministic).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -103,6 +109,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     let options = MethodOptions {
         max_error: args.max_error,
         fill_holes: args.fill_holes,
+        keep_positions: args.keep_positions,
         weights: args.weights.as_deref(),
         seed: args.seed,
     };

@@ -115,6 +115,15 @@ fn bad_arguments_write_nothing() {
             out_path,
             "--ratio",
             "0.5",
+            "--keep-positions",
+        ],
+        vec![
+            "simplify",
+            &input,
+            "-o",
+            out_path,
+            "--ratio",
+            "0.5",
             "--method",
             "neural",
             "--fill-holes",
@@ -171,8 +180,27 @@ fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_waterti
         )
     };
     let (summary, mesh, bytes) = run("a.ply", &[]);
-    // 10 % of the 2 562 vertices, every one at an input position.
+    // 10 % of the 2 562 vertices, placed off the input's vertices (each at its region's
+    // quadric optimum); with --keep-positions every one at an input vertex, the same faces.
     assert_eq!(mesh.vertex_count(), 256);
+    let input_vertices: std::collections::HashSet<[u32; 3]> = read_mesh(&input)
+        .unwrap()
+        .vertices()
+        .iter()
+        .map(|p| p.map(f32::to_bits))
+        .collect();
+    let at_input = |m: &meshgnn_geometry::TriMesh| {
+        let bits = m.vertices().iter().map(|p| p.map(f32::to_bits));
+        bits.filter(|b| input_vertices.contains(b)).count()
+    };
+    let (_, selected, _) = run("d.ply", &["--keep-positions"]);
+    assert_eq!(selected.triangles(), mesh.triangles());
+    assert_eq!(at_input(&selected), 256);
+    assert!(
+        at_input(&mesh) < 26,
+        "{} placed vertices at input ones",
+        at_input(&mesh)
+    );
     assert!(summary["error"].is_null());
     assert_eq!(
         summary["output_faces"].as_u64().unwrap() as usize,

@@ -24,8 +24,8 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
 use meshgnn_models::mesh_simplifier::{
-    DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig, SimplifierExample,
-    SimplifierTraining, qem_importance,
+    DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
+    NeuralSimplifyOptions, SimplifierExample, SimplifierTraining, qem_importance,
 };
 use meshgnn_models::training::{TrainingConfig, train};
 
@@ -46,7 +46,8 @@ fn surface_chamfer(a: &TriMesh, b: &TriMesh) -> AnyResult<f64> {
 
 /// Simplifies each test mesh to a tenth of its vertices; prints raw and final WA, the holes
 /// left, WA and holes after closing those of at most 30 edges, and the Chamfer distance
-/// against QEM's at the same face count.
+/// against QEM's at the same face count, with the vertices placed and at their selected
+/// positions.
 fn report(
     model: &NeuralMeshSimplifier,
     test: &[(&str, TriMesh, f64)],
@@ -54,19 +55,32 @@ fn report(
 ) -> AnyResult<()> {
     for (name, mesh, cd_qem) in test {
         let started = std::time::Instant::now();
-        let out = model.simplify(mesh, mesh.vertex_count() / 10, 1, None)?;
+        let out = model.simplify(mesh, mesh.vertex_count() / 10, 1, &Default::default())?;
         let seconds = started.elapsed().as_secs_f64();
-        let filled = model
-            .simplify(mesh, mesh.vertex_count() / 10, 1, Some(30))?
+        let with_holes_filled = NeuralSimplifyOptions {
+            fill_holes_up_to: Some(30),
+            ..Default::default()
+        };
+        let keep_positions = NeuralSimplifyOptions {
+            keep_positions: true,
+            ..Default::default()
+        };
+        let selected = model
+            .simplify(mesh, mesh.vertex_count() / 10, 1, &keep_positions)?
             .mesh;
-        let cd = if out.mesh.face_count() == 0 {
-            f64::NAN
-        } else {
-            surface_chamfer(mesh, &out.mesh)?
+        let filled = model
+            .simplify(mesh, mesh.vertex_count() / 10, 1, &with_holes_filled)?
+            .mesh;
+        let cd = |simplified: &TriMesh| {
+            if simplified.face_count() == 0 {
+                Ok(f64::NAN)
+            } else {
+                surface_chamfer(mesh, simplified)
+            }
         };
         println!(
             "{label} {name} ({} faces): raw {} faces WA_raw {:.2} -> {} faces WA {:.2} holes {} \
-             (filled: WA {:.2} holes {}) CD/qem {:.2} ({seconds:.2} s)",
+             (filled: WA {:.2} holes {}) CD/qem {:.2} (selected positions {:.2}) ({seconds:.2} s)",
             mesh.face_count(),
             out.raw_faces,
             out.wa_raw,
@@ -75,7 +89,8 @@ fn report(
             out.holes,
             watertightness(&filled),
             boundary_loops(&filled).len(),
-            cd / cd_qem,
+            cd(&out.mesh)? / cd_qem,
+            cd(&selected)? / cd_qem,
         );
     }
     Ok(())

@@ -190,7 +190,11 @@ mod tests {
         let simplifier: crate::mesh_simplifier::NeuralMeshSimplifier =
             load("neural_mesh_simplifier").unwrap();
         let sphere = meshgnn_geometry::icosphere(4); // 2 562 vertices
-        let out = simplifier.simplify(&sphere, 256, 0, Some(30)).unwrap();
+        let options = crate::mesh_simplifier::NeuralSimplifyOptions {
+            fill_holes_up_to: Some(30),
+            ..Default::default()
+        };
+        let out = simplifier.simplify(&sphere, 256, 0, &options).unwrap();
         assert!(
             out.mesh.face_count() > 400,
             "{} faces",

@@ -1,7 +1,8 @@
 //! QEM edge-collapse decimation (Garland & Heckbert 1997) and what is built on it: the
 //! decimation itself ([`decimate`], algorithm and guarantees in `decimation.rs`), the plane
-//! quadrics it sums ([`Quadric`]) and QEM vertex selection for point clouds on a mesh
-//! ([`qem_vertices`], thesis ch. 5.5). The other files are the decimation's parts: welding,
+//! quadrics it sums ([`Quadric`]), QEM vertex selection for point clouds on a mesh
+//! ([`qem_vertices`], thesis ch. 5.5) and the quadric placement of selected vertices
+//! ([`region_quadric_placement`], for the neural mesh simplifier of ch. 6). The other files are the decimation's parts: welding,
 //! vertex records and collapses, edge placement, validity checks, candidate sorting,
 //! speculative parallel checks, memory warm-up and the changed-vertex sets.
 
@@ -12,6 +13,7 @@ mod decimation;
 mod edge_placement;
 mod memory_warmup;
 mod quadric;
+mod region_placement;
 mod speculation;
 mod vertex_bits;
 mod vertex_selection;
@@ -21,4 +23,5 @@ pub use decimation::{
     Decimation, DecimationOptions, StopReason, Target, decimate, decimate_with_progress,
 };
 pub use quadric::Quadric;
+pub use region_placement::region_quadric_placement;
 pub use vertex_selection::{QemVertices, qem_vertices};

@@ -110,29 +110,60 @@ impl Quadric {
     /// ```
     #[inline]
     pub fn optimal_point(&self) -> Option<[f64; 3]> {
-        let [a00, a01, a02, a11, a12, a22] = self.a;
-        // Cofactors of the symmetric matrix.
-        let c00 = a11 * a22 - a12 * a12;
-        let c01 = a02 * a12 - a01 * a22;
-        let c02 = a01 * a12 - a02 * a11;
-        let det = a00 * c00 + a01 * c01 + a02 * c02;
-        let scale = self.weight() / 3.0;
-        let threshold = 1e-10 * scale * scale * scale;
-        if scale.is_nan() || scale <= 0.0 || det.is_nan() || det.abs() <= threshold {
-            return None;
-        }
-        let c11 = a00 * a22 - a02 * a02;
-        let c12 = a01 * a02 - a00 * a12;
-        let c22 = a00 * a11 - a01 * a01;
-        let [b0, b1, b2] = self.b;
-        let inv = -1.0 / det;
-        let v = [
-            inv * (c00 * b0 + c01 * b1 + c02 * b2),
-            inv * (c01 * b0 + c11 * b1 + c12 * b2),
-            inv * (c02 * b0 + c12 * b1 + c22 * b2),
-        ];
-        v.iter().all(|x| x.is_finite()).then_some(v)
+        solve_symmetric(self.a, self.b)
     }
+
+    /// The point minimising `Q(v) + μ·|v − anchor|²` with `μ = strength · weight / 3`: the
+    /// optimum along the directions the planes pin down, `anchor` along those they leave
+    /// free (a flat region moves only along its normal, a crease only across its line), as
+    /// Lindstrom's truncated solve does ("Out-of-core simplification of large polygonal
+    /// models", SIGGRAPH 2000). `None` for a quadric without planes, non-finite input, or a
+    /// `strength` so small (below about 1e-4) that the system fails [`Self::optimal_point`]'s
+    /// conditioning test.
+    ///
+    /// ```
+    /// use meshgnn_graph::Quadric;
+    /// // A single plane z = 2: the anchor drops onto it and keeps its x and y.
+    /// let q = Quadric::from_plane([0.0, 0.0, 1.0], [0.0, 0.0, 2.0], 1.0);
+    /// let v = q.regularized_point([5.0, -1.0, 7.0], 1e-3).unwrap();
+    /// assert!((v[0] - 5.0).abs() < 1e-9 && (v[1] + 1.0).abs() < 1e-9 && (v[2] - 2.0).abs() < 2e-3);
+    /// ```
+    pub fn regularized_point(&self, anchor: [f64; 3], strength: f64) -> Option<[f64; 3]> {
+        let mu = strength * self.weight() / 3.0;
+        let mut a = self.a;
+        for diagonal in [0, 3, 5] {
+            a[diagonal] += mu;
+        }
+        solve_symmetric(a, std::array::from_fn(|k| self.b[k] - mu * anchor[k]))
+    }
+}
+
+/// The solution of `A v = −b` for the symmetric `A` (upper triangle a00 a01 a02 a11 a12 a22),
+/// or `None` when `|det A| ≤ 1e-10·(trace A / 3)³` (scale-free) or the result is not finite.
+#[inline]
+fn solve_symmetric(a: [f64; 6], b: [f64; 3]) -> Option<[f64; 3]> {
+    let [a00, a01, a02, a11, a12, a22] = a;
+    // Cofactors of the symmetric matrix.
+    let c00 = a11 * a22 - a12 * a12;
+    let c01 = a02 * a12 - a01 * a22;
+    let c02 = a01 * a12 - a02 * a11;
+    let det = a00 * c00 + a01 * c01 + a02 * c02;
+    let scale = (a00 + a11 + a22) / 3.0;
+    let threshold = 1e-10 * scale * scale * scale;
+    if scale.is_nan() || scale <= 0.0 || det.is_nan() || det.abs() <= threshold {
+        return None;
+    }
+    let c11 = a00 * a22 - a02 * a02;
+    let c12 = a01 * a02 - a00 * a12;
+    let c22 = a00 * a11 - a01 * a01;
+    let [b0, b1, b2] = b;
+    let inv = -1.0 / det;
+    let v = [
+        inv * (c00 * b0 + c01 * b1 + c02 * b2),
+        inv * (c01 * b0 + c11 * b1 + c12 * b2),
+        inv * (c02 * b0 + c12 * b1 + c22 * b2),
+    ];
+    v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
 impl Add for Quadric {

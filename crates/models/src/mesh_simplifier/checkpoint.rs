@@ -145,8 +145,10 @@ mod tests {
         assert_eq!(loaded.config(), model.config());
         let sphere = meshgnn_geometry::icosphere(2);
         let (a, b) = (
-            model.simplify(&sphere, 40, 1, None).unwrap(),
-            loaded.simplify(&sphere, 40, 1, None).unwrap(),
+            model.simplify(&sphere, 40, 1, &Default::default()).unwrap(),
+            loaded
+                .simplify(&sphere, 40, 1, &Default::default())
+                .unwrap(),
         );
         assert_eq!(a.mesh, b.mesh);
         let mut header = config.header();

@@ -41,7 +41,7 @@ pub use neighbour_minimum::neighbour_minimum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MIN_NEURAL_FACES, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
-    NeuralSimplification, SAMPLER_CLOUD_NEIGHBOURS, SimplifierPass,
+    NeuralSimplification, NeuralSimplifyOptions, SAMPLER_CLOUD_NEIGHBOURS, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{

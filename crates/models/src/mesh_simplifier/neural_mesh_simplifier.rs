@@ -5,13 +5,16 @@
 //! (ch. 6.4), makes them edge-manifold, each facing along the input's normals
 //! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the holes left: first
 //! the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then every
-//! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]).
+//! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond the
+//! thesis, each selected vertex then moves to the quadric optimum of the input region it
+//! stands for ([`meshgnn_graph::region_quadric_placement`]) unless
+//! [`NeuralSimplifyOptions::keep_positions`] asks for the thesis' selection as it is.
 //!
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
 //!   before the network sees it; outputs are in the input's units.
 //! - The simplified mesh keeps all `M` sampled vertices in draw order (a vertex no kept face
-//!   uses stays, isolated), at their input positions: the simplifier selects, it never moves.
+//!   uses stays, isolated): at their input positions with `keep_positions`, else placed.
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
@@ -20,7 +23,8 @@ use meshgnn_geometry::{
     unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, Target, balanced_sampling, hilbert_order, knn_graph, vertex_adjacency,
+    CsrMatrix, Target, balanced_sampling, hilbert_order, knn_graph, region_quadric_placement,
+    vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -107,6 +111,18 @@ pub struct SimplifierPass {
     pub face_probabilities: Tensor,
 }
 
+/// How [`NeuralMeshSimplifier::simplify`] finishes the network's output (both beyond the
+/// thesis; the default places the vertices and leaves holes open).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NeuralSimplifyOptions {
+    /// Close the cracks with rejected candidates, then every hole of at most this many
+    /// edges (at most [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`]).
+    pub fill_holes_up_to: Option<usize>,
+    /// Leave the selected vertices at their input positions (the thesis' output) instead of
+    /// moving each to its region's quadric optimum.
+    pub keep_positions: bool,
+}
+
 /// A simplified mesh and its watertightness before and after the manifold pass.
 #[derive(Clone, Debug)]
 pub struct NeuralSimplification {
@@ -147,7 +163,7 @@ impl NeuralMeshSimplifier {
     /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
     /// let model = NeuralMeshSimplifier::new(vb, &NeuralMeshSimplifierConfig::default())?;
     /// let sphere = meshgnn_geometry::icosphere(3); // 642 vertices
-    /// let out = model.simplify(&sphere, 160, 1, None)?;
+    /// let out = model.simplify(&sphere, 160, 1, &Default::default())?;
     /// assert_eq!(out.mesh.vertex_count(), 160);
     /// assert!(meshgnn_geometry::is_edge_manifold(&out.mesh));
     /// # Ok::<(), meshgnn_models::Error>(())
@@ -300,7 +316,7 @@ impl NeuralMeshSimplifier {
         mesh: &TriMesh,
         target: &Target,
         seed: u64,
-        fill_holes_up_to: Option<usize>,
+        options: &NeuralSimplifyOptions,
         progress: &mut dyn FnMut(f64),
     ) -> Result<NeuralSimplification> {
         if mesh.face_count() < MIN_NEURAL_FACES {
@@ -312,18 +328,13 @@ impl NeuralMeshSimplifier {
                 ),
             });
         }
-        self.simplify_with_progress(
-            mesh,
-            target.vertex_count(mesh),
-            seed,
-            fill_holes_up_to,
-            progress,
-        )
+        self.simplify_with_progress(mesh, target.vertex_count(mesh), seed, options, progress)
     }
 
     /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
-    /// then the manifold pass (module docs), then, with `fill_holes_up_to: Some(k)`, the
-    /// cracks closed with rejected candidates and every hole of at most `k` edges filled.
+    /// then the manifold pass (module docs), the vertices placed unless
+    /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
+    /// closed with rejected candidates and every hole of at most `k` edges filled.
     /// Errors on a mesh without faces, a bad target or `k` above
     /// [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`].
     pub fn simplify(
@@ -331,9 +342,9 @@ impl NeuralMeshSimplifier {
         mesh: &TriMesh,
         target: usize,
         seed: u64,
-        fill_holes_up_to: Option<usize>,
+        options: &NeuralSimplifyOptions,
     ) -> Result<NeuralSimplification> {
-        self.simplify_with_progress(mesh, target, seed, fill_holes_up_to, &mut |_| {})
+        self.simplify_with_progress(mesh, target, seed, options, &mut |_| {})
     }
 
     /// [`Self::simplify`] calling `progress(fraction in [0, 1])` after each stage.
@@ -342,7 +353,7 @@ impl NeuralMeshSimplifier {
         mesh: &TriMesh,
         target: usize,
         seed: u64,
-        fill_holes_up_to: Option<usize>,
+        options: &NeuralSimplifyOptions,
         progress: &mut dyn FnMut(f64),
     ) -> Result<NeuralSimplification> {
         let n = mesh.vertex_count();
@@ -381,7 +392,14 @@ impl NeuralMeshSimplifier {
             FACE_THRESHOLD,
             Some(&normals),
         )?;
-        let mesh = match fill_holes_up_to {
+        let selected = TriMesh::new(vertices, faces)?;
+        let vertices = if options.keep_positions {
+            selected.vertices().to_vec()
+        } else {
+            region_quadric_placement(mesh, &vertex_map, &selected)?
+        };
+        let faces = selected.triangles().to_vec();
+        let mesh = match options.fill_holes_up_to {
             None => TriMesh::new(vertices, faces)?,
             Some(max_edges) => {
                 let closed = close_cracks(&faces, &pass.candidates.triangles, &probabilities)?;
@@ -430,8 +448,12 @@ mod tests {
             .map(|p| [p[0] * 40.0 + 7.0, p[1] * 40.0, p[2] * 40.0 - 3.0])
             .collect();
         let mesh = TriMesh::new(big, sphere.triangles().to_vec()).unwrap();
-        let a = m.simplify(&mesh, 120, 4, None).unwrap();
-        let b = m.simplify(&mesh, 120, 4, None).unwrap();
+        let selection = NeuralSimplifyOptions {
+            keep_positions: true,
+            ..Default::default()
+        };
+        let a = m.simplify(&mesh, 120, 4, &selection).unwrap();
+        let b = m.simplify(&mesh, 120, 4, &selection).unwrap();
         assert_eq!(a.mesh, b.mesh);
         assert_eq!(a.mesh.vertex_count(), 120);
         assert!(is_edge_manifold(&a.mesh));
@@ -448,12 +470,45 @@ mod tests {
     }
 
     #[test]
+    fn placement_moves_the_selected_vertices_outwards_and_keeps_the_faces() {
+        // On a sphere every region's quadric optimum lies just outside it (the coarse faces
+        // are chords); the faces are the selection's.
+        let m = model();
+        let sphere = meshgnn_geometry::icosphere(3);
+        let big: Vec<[f32; 3]> = sphere
+            .vertices()
+            .iter()
+            .map(|p| [p[0] * 40.0 + 7.0, p[1] * 40.0, p[2] * 40.0 - 3.0])
+            .collect();
+        let mesh = TriMesh::new(big, sphere.triangles().to_vec()).unwrap();
+        let keep = NeuralSimplifyOptions {
+            keep_positions: true,
+            ..Default::default()
+        };
+        let selected = m.simplify(&mesh, 120, 4, &keep).unwrap();
+        let placed = m.simplify(&mesh, 120, 4, &Default::default()).unwrap();
+        assert_eq!(selected.mesh.triangles(), placed.mesh.triangles());
+        assert_eq!(selected.vertex_map, placed.vertex_map);
+        let radius = |p: &[f32; 3]| {
+            let d = [p[0] - 7.0, p[1], p[2] + 3.0];
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        };
+        let outwards = placed
+            .mesh
+            .vertices()
+            .iter()
+            .filter(|p| radius(p) > 40.0 * (1.0 + 1e-4) && radius(p) < 40.0 * 1.05)
+            .count();
+        assert!(outwards >= 110, "{outwards} of 120 moved outwards");
+    }
+
+    #[test]
     fn bad_targets_and_faceless_meshes_are_errors() {
         let m = model();
         let sphere = meshgnn_geometry::icosphere(1);
-        assert!(m.simplify(&sphere, 2, 0, None).is_err());
-        assert!(m.simplify(&sphere, 43, 0, None).is_err());
+        assert!(m.simplify(&sphere, 2, 0, &Default::default()).is_err());
+        assert!(m.simplify(&sphere, 43, 0, &Default::default()).is_err());
         let cloud = TriMesh::new(sphere.vertices().to_vec(), vec![]).unwrap();
-        assert!(m.simplify(&cloud, 10, 0, None).is_err());
+        assert!(m.simplify(&cloud, 10, 0, &Default::default()).is_err());
     }
 }

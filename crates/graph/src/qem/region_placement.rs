@@ -1,0 +1,312 @@
+//! Vertex placement for a simplifier that selects input vertices (the neural mesh simplifier
+//! of thesis ch. 6): every selected vertex stands for its geodesic Voronoi region of the input
+//! and moves to the point that minimises the quadric error of the input faces around that
+//! region — Garland & Heckbert's quadrics summed per cluster, as clustering simplifiers place
+//! their representatives (Lindstrom, "Out-of-core simplification of large polygonal models",
+//! SIGGRAPH 2000; Valette et al.'s ACVD). A selection cannot put a vertex where the surface is
+//! best approximated (off the input's vertices, outside a convex bend, on a crease line
+//! between samples); this step can, while the faces stay as chosen.
+//!
+//! # Conventions
+//! - The solve is regularised towards the selected position ([`Quadric::regularized_point`]):
+//!   a flat region moves only along its normal, a crease only across its line.
+//! - Open borders add the decimation's border planes (through each border edge, perpendicular
+//!   to its face, weight `boundary_weight · |e|²`), so a border stays where it was.
+//! - A vertex stays selected where its optimum lies farther from it than the farthest input
+//!   vertex of its region, and where moving it would turn one of its output faces by more
+//!   than acos(0.2) ≈ 78° (the decimation's flip bound); vertices after the selected ones
+//!   (hole-filling centres) never move.
+
+use meshgnn_geometry::vec3::{cross, dot, norm, sub, to_f64};
+use meshgnn_geometry::{TriMesh, edge_topology, geodesic_voronoi_regions};
+
+use super::decimation::DecimationOptions;
+use super::quadric::Quadric;
+use crate::error::{Error, Result};
+
+/// Pull of the selected position on its region's optimum, relative to the region's mean
+/// plane weight: strong enough to fix the directions no plane constrains, weak enough
+/// (1/1000) to leave the others to the quadric.
+const ANCHOR_STRENGTH: f64 = 1e-3;
+
+/// A moved face must keep its normal within acos(0.2) of its normal before the move.
+const MIN_NORMAL_COSINE: f64 = 0.2;
+
+/// The positions of `output`'s vertices after moving each selected vertex `o < seeds.len()`
+/// (which sits at input vertex `seeds[o]`) to its region's quadric optimum (module docs);
+/// the other vertices keep theirs. Errors when `seeds` is longer than `output`'s vertex list
+/// or names a vertex of `input` out of range or twice.
+///
+/// ```
+/// use meshgnn_geometry::{TriMesh, icosphere};
+/// use meshgnn_graph::region_quadric_placement;
+/// // A coarse selection of a sphere's vertices sits on the sphere; its triangles cut inside.
+/// // Placed, the vertices move outwards so the triangles straddle the surface.
+/// let sphere = icosphere(4);
+/// let coarse = icosphere(1);
+/// let seeds: Vec<u32> = (0..coarse.vertex_count() as u32).collect();
+/// let placed = region_quadric_placement(&sphere, &seeds, &coarse)?;
+/// let radius = |p: [f32; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+/// assert!(placed.iter().all(|&p| radius(p) > 1.0 && radius(p) < 1.1));
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn region_quadric_placement(
+    input: &TriMesh,
+    seeds: &[u32],
+    output: &TriMesh,
+) -> Result<Vec<[f32; 3]>> {
+    let selected = output.vertices();
+    if seeds.len() > selected.len() {
+        return Err(Error::InvalidParameter {
+            name: "seeds",
+            message: format!(
+                "{} seeds for an output of {} vertices",
+                seeds.len(),
+                selected.len()
+            ),
+        });
+    }
+    let region = geodesic_voronoi_regions(input, seeds)?;
+    let anchors: Vec<[f64; 3]> = selected[..seeds.len()].iter().map(|&p| to_f64(p)).collect();
+    let quadrics = region_quadrics(input, &region, seeds.len());
+    let mut reach = vec![0.0f64; seeds.len()];
+    for (p, &r) in input.vertices().iter().zip(&region) {
+        if let Some(reach) = reach.get_mut(r as usize) {
+            *reach = reach.max(norm(sub(to_f64(*p), anchors[r as usize])));
+        }
+    }
+    let mut placed: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
+    for (o, (quadric, anchor)) in quadrics.iter().zip(&anchors).enumerate() {
+        if let Some(p) = quadric.regularized_point(*anchor, ANCHOR_STRENGTH)
+            && norm(sub(p, *anchor)) <= reach[o]
+        {
+            placed[o] = p;
+        }
+    }
+    undo_flipping_moves(output, &anchors, &mut placed);
+    Ok(placed.iter().map(|p| p.map(|x| x as f32)).collect())
+}
+
+/// Per region, the area-weighted plane quadrics of every face at each of its corners in the
+/// region, plus the border planes of the border edges it touches (module docs).
+fn region_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadric> {
+    let position = |v: u32| to_f64(input.vertices()[v as usize]);
+    let mut quadrics = vec![Quadric::default(); regions];
+    let mut add = |v: u32, q: Quadric| {
+        if let Some(sum) = quadrics.get_mut(region[v as usize] as usize) {
+            *sum += q;
+        }
+    };
+    let face_normal = |t: &[u32; 3]| {
+        let [p0, p1, p2] = t.map(position);
+        (cross(sub(p1, p0), sub(p2, p0)), p0)
+    };
+    for t in input.triangles() {
+        let (normal, point) = face_normal(t);
+        let plane = Quadric::from_plane(normal, point, 0.5 * norm(normal));
+        for &v in t {
+            add(v, plane);
+        }
+    }
+    let boundary_weight = DecimationOptions::default().boundary_weight;
+    let topology = edge_topology(input);
+    for (e, &[a, b]) in topology.edges().iter().enumerate() {
+        if let [incidence] = topology.incidences(e) {
+            let (normal, _) = face_normal(&input.triangles()[incidence.face as usize]);
+            let edge = sub(position(b), position(a));
+            let plane = Quadric::from_plane(
+                cross(edge, normal),
+                position(a),
+                boundary_weight * dot(edge, edge),
+            );
+            add(a, plane);
+            add(b, plane);
+        }
+    }
+    quadrics
+}
+
+/// Puts selected vertices back at their anchors until no face of `output` turns by more than
+/// acos([`MIN_NORMAL_COSINE`]) from its normal at the anchors (faces degenerate there are not
+/// judged). Terminates: each round puts back at least one vertex or stops.
+fn undo_flipping_moves(output: &TriMesh, anchors: &[[f64; 3]], placed: &mut [[f64; 3]]) {
+    let normal = |positions: &dyn Fn(u32) -> [f64; 3], t: &[u32; 3]| {
+        let [p0, p1, p2] = t.map(positions);
+        cross(sub(p1, p0), sub(p2, p0))
+    };
+    let before: Vec<[f64; 3]> = {
+        let at_anchor = |v: u32| {
+            anchors
+                .get(v as usize)
+                .copied()
+                .unwrap_or(to_f64(output.vertices()[v as usize]))
+        };
+        output
+            .triangles()
+            .iter()
+            .map(|t| normal(&at_anchor, t))
+            .collect()
+    };
+    loop {
+        let mut put_back: Vec<u32> = Vec::new();
+        for (t, n0) in output.triangles().iter().zip(&before) {
+            let n1 = normal(&|v| placed[v as usize], t);
+            let turned = dot(*n0, n1) <= MIN_NORMAL_COSINE * norm(*n0) * norm(n1);
+            if norm(*n0) > 0.0 && turned {
+                put_back.extend(t.iter().filter(|&&v| {
+                    anchors
+                        .get(v as usize)
+                        .is_some_and(|a| placed[v as usize] != *a)
+                }));
+            }
+        }
+        if put_back.is_empty() {
+            return;
+        }
+        for v in put_back {
+            placed[v as usize] = anchors[v as usize];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::{grid_plane, icosphere};
+
+    fn radius(p: [f32; 3]) -> f64 {
+        norm(to_f64(p))
+    }
+
+    /// Mean |radius − 1| over the points of each face at barycentric steps of 1/8.
+    fn mean_radial_error(vertices: &[[f32; 3]], mesh: &TriMesh) -> f64 {
+        let (mut sum, mut count) = (0.0, 0.0);
+        for t in mesh.triangles() {
+            let [a, b, c] = t.map(|v| to_f64(vertices[v as usize]));
+            for i in 0..=8 {
+                for j in 0..=8 - i {
+                    let (u, v) = (f64::from(i) / 8.0, f64::from(j) / 8.0);
+                    let p: [f64; 3] =
+                        std::array::from_fn(|k| a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]));
+                    sum += (norm(p) - 1.0).abs();
+                    count += 1.0;
+                }
+            }
+        }
+        sum / count
+    }
+
+    #[test]
+    fn a_coarse_sphere_moves_outwards_and_fits_the_surface_better() {
+        // Selected on the unit sphere, the coarse triangles lie inside it; each region's
+        // optimum is just outside, so the faces straddle the surface.
+        let fine = icosphere(5);
+        let coarse = icosphere(2);
+        let seeds: Vec<u32> = (0..coarse.vertex_count() as u32).collect();
+        let placed = region_quadric_placement(&fine, &seeds, &coarse).unwrap();
+        for &p in &placed {
+            assert!(radius(p) > 1.0 && radius(p) < 1.02, "radius {}", radius(p));
+        }
+        let before = mean_radial_error(coarse.vertices(), &coarse);
+        let after = mean_radial_error(&placed, &coarse);
+        assert!(after < 0.6 * before, "{after} against {before}");
+    }
+
+    #[test]
+    fn a_flat_grid_stays_flat_and_its_border_regions_move_onto_the_border() {
+        // A plane fixes only its normal: interior regions stay where they are; a region
+        // touching the border is held on the border's line by the border planes (and in its
+        // corner where two lines meet), as the output vertex it gives is a border vertex.
+        let fine = grid_plane(16, 16);
+        let seeds: Vec<u32> = (0..fine.vertex_count() as u32).step_by(5).collect();
+        let positions: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
+        let output = TriMesh::new(positions.clone(), vec![]).unwrap();
+        let placed = region_quadric_placement(&fine, &seeds, &output).unwrap();
+        let region = geodesic_voronoi_regions(&fine, &seeds).unwrap();
+        // Within 1e-4 (the pull of the anchor; the grid step is 1/16).
+        let on_border = |p: [f32; 3]| {
+            p[..2]
+                .iter()
+                .any(|&x| x.abs() < 1e-4 || (x - 1.0).abs() < 1e-4)
+        };
+        let mut moved = 0;
+        for (o, (p, q)) in placed.iter().zip(&positions).enumerate() {
+            assert!(p[2].abs() < 1e-6, "{p:?} left the plane");
+            let touches_border = fine
+                .vertices()
+                .iter()
+                .zip(&region)
+                .any(|(&v, &r)| r as usize == o && on_border(v));
+            if touches_border {
+                assert!(on_border(*p), "{p:?} (from {q:?}) is off the border");
+                moved += usize::from(p != q);
+            } else {
+                assert!(
+                    norm(sub(to_f64(*p), to_f64(*q))) < 1e-6,
+                    "{p:?} moved from {q:?}"
+                );
+            }
+        }
+        assert!(moved > 0);
+    }
+
+    #[test]
+    fn seeds_next_to_a_cubes_corners_snap_to_the_corners() {
+        // One seed a step from each corner: each region holds its corner and parts of the
+        // three faces meeting there, whose planes' optimum is the corner itself.
+        let cube = meshgnn_geometry::subdivided_cube(8);
+        let v = cube.vertices();
+        let extent = v.iter().map(|p| p[0]).fold(0.0f32, f32::max);
+        let corners: Vec<u32> = (0..v.len() as u32)
+            .filter(|&i| v[i as usize].iter().all(|x| x.abs() == extent))
+            .collect();
+        assert_eq!(corners.len(), 8);
+        let seeds: Vec<u32> = corners
+            .iter()
+            .map(|&c| {
+                let neighbours = cube.triangles().iter().filter(|t| t.contains(&c)).flatten();
+                *neighbours.filter(|&&u| u != c).min().unwrap()
+            })
+            .collect();
+        let output = TriMesh::new(seeds.iter().map(|&s| v[s as usize]).collect(), vec![]).unwrap();
+        let placed = region_quadric_placement(&cube, &seeds, &output).unwrap();
+        let step = f64::from(extent) / 4.0;
+        for (p, &c) in placed.iter().zip(&corners) {
+            let miss = norm(sub(to_f64(*p), to_f64(v[c as usize])));
+            assert!(miss < 0.01 * step, "{miss} from the corner");
+        }
+    }
+
+    #[test]
+    fn a_move_that_would_flip_a_face_is_undone() {
+        // A square of two faces whose fourth vertex is pulled across the diagonal.
+        let anchors = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let output = TriMesh::new(
+            anchors
+                .iter()
+                .map(|p: &[f64; 3]| p.map(|x| x as f32))
+                .collect(),
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        let mut placed = anchors;
+        placed[3] = [0.9, 0.2, 0.0];
+        placed[1] = [1.1, 0.0, 0.01];
+        undo_flipping_moves(&output, &anchors, &mut placed);
+        assert_eq!(placed[3], anchors[3]);
+        assert_eq!(placed[1], [1.1, 0.0, 0.01]);
+    }
+
+    #[test]
+    fn too_many_or_repeated_seeds_are_errors() {
+        let sphere = icosphere(1);
+        let output = TriMesh::new(sphere.vertices()[..2].to_vec(), vec![]).unwrap();
+        assert!(region_quadric_placement(&sphere, &[0, 1, 2], &output).is_err());
+        assert!(region_quadric_placement(&sphere, &[0, 0], &output).is_err());
+    }
+}
