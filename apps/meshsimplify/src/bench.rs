@@ -1,6 +1,6 @@
 //! `meshsimplify bench DIR [--ratios 0.05,0.1,0.2,0.5] [--methods neural,qem,pc+remesh]
-//! [--samples 50000] [--seed S] [--neural-weights FILE] [--keep-positions] [--json]
-//! [--json-out FILE]`: every
+//! [--samples 50000] [--seed S] [--neural-weights FILE] [--keep-positions] [--fill-holes [K]]
+//! [--json] [--json-out FILE]`: every
 //! method at every ratio on every mesh of a folder, scored like `meshsimplify eval` and printed
 //! in the layout of thesis Table 6.1 (CD, WA, LE, NE and seconds per mesh, means over files).
 //!
@@ -47,6 +47,10 @@ pub struct BenchArgs {
     /// output) instead of placing them.
     #[arg(long)]
     pub keep_positions: bool,
+    /// The neural method closes the holes of at most K boundary edges after its manifold
+    /// pass, as `simplify --fill-holes` does.
+    #[arg(long, value_name = "K", num_args = 0..=1, default_missing_value = "30")]
+    pub fill_holes: Option<usize>,
     /// Print one JSON object instead of Markdown.
     #[arg(long)]
     pub json: bool,
@@ -110,6 +114,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     .as_deref()
                     .filter(|_| method == Method::Neural),
                 keep_positions: args.keep_positions && method == Method::Neural,
+                fill_holes: args.fill_holes.filter(|_| method == Method::Neural),
                 seed: args.seed,
                 ..Default::default()
             };

@@ -397,6 +397,43 @@ fn bench_scores_every_method_and_ratio_and_lists_what_it_skipped() {
     let skipped = report["skipped"].as_array().unwrap();
     assert_eq!(skipped.len(), 1);
     assert_eq!(skipped[0]["file"], "c_broken.obj");
+    // The neural method's options: hole filling leaves no more holes; the selected positions
+    // give another surface than the placed ones.
+    let neural_rows = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            dir.path().to_str().unwrap(),
+            "--ratios",
+            "0.2,0.5",
+            "--methods",
+            "neural",
+            "--samples",
+            "2000",
+            "--json",
+        ];
+        args.extend(extra);
+        let out = meshsimplify(&args);
+        assert!(out.status.success(), "{out:?}");
+        let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+        report["per_file"].as_array().unwrap().clone()
+    };
+    let placed: Vec<&Value> = report["per_file"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|row| row["method"] == "neural")
+        .collect();
+    for (filled, placed) in neural_rows(&["--fill-holes"]).iter().zip(&placed) {
+        assert_eq!(filled["file"], placed["file"]);
+        assert!(filled["holes"].as_u64() <= placed["holes"].as_u64());
+    }
+    let selected = neural_rows(&["--keep-positions"]);
+    assert!(
+        selected
+            .iter()
+            .zip(&placed)
+            .any(|(s, p)| s["cd"] != p["cd"])
+    );
     // The Markdown table: a header with every metric per ratio, one line per method.
     let out = meshsimplify(&[
         "bench",
