@@ -302,6 +302,72 @@ mod tests {
         assert_eq!(placed[1], [1.1, 0.0, 0.01]);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// On a noisy sphere (some faces cut away, so it has borders) with any seeds and
+        /// their Voronoi-dual faces: finite positions, no face turned past the bound, every
+        /// vertex within its region's reach, the same result twice.
+        #[test]
+        fn placement_is_finite_bounded_and_never_flips_a_face(
+            noise in 0.0f32..0.3,
+            stride in 2usize..9,
+            holes in 0usize..40,
+            salt in 0u32..1000,
+        ) {
+            let sphere = icosphere(3);
+            let jitter = |i: usize, k: usize| {
+                let h = (i as u32 * 3 + k as u32).wrapping_mul(2_654_435_761) ^ salt;
+                (h % 1000) as f32 / 1000.0 - 0.5
+            };
+            let vertices: Vec<[f32; 3]> = sphere
+                .vertices()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| std::array::from_fn(|k| p[k] * (1.0 + noise * jitter(i, k))))
+                .collect();
+            let faces: Vec<[u32; 3]> = sphere
+                .triangles()
+                .iter()
+                .enumerate()
+                .filter(|&(f, _)| holes == 0 || f % (holes + 7) != 0)
+                .map(|(_, t)| *t)
+                .collect();
+            let input = TriMesh::new(vertices, faces).unwrap();
+            let seeds: Vec<u32> = (salt as usize % stride..input.vertex_count())
+                .step_by(stride)
+                .map(|v| v as u32)
+                .collect();
+            let dual = meshgnn_geometry::voronoi_dual_triangles(&input, &seeds).unwrap();
+            let corners = seeds.iter().map(|&s| input.vertices()[s as usize]).collect();
+            let output = TriMesh::new(corners, dual).unwrap();
+            let placed = region_quadric_placement(&input, &seeds, &output).unwrap();
+            proptest::prop_assert_eq!(&placed, &region_quadric_placement(&input, &seeds, &output).unwrap());
+            let region = geodesic_voronoi_regions(&input, &seeds).unwrap();
+            let anchor = |o: usize| to_f64(output.vertices()[o]);
+            for (o, p) in placed.iter().enumerate() {
+                proptest::prop_assert!(p.iter().all(|x| x.is_finite()));
+                let reach = input
+                    .vertices()
+                    .iter()
+                    .zip(&region)
+                    .filter(|&(_, &r)| r as usize == o)
+                    .map(|(&v, _)| norm(sub(to_f64(v), anchor(o))))
+                    .fold(0.0, f64::max);
+                proptest::prop_assert!(norm(sub(to_f64(*p), anchor(o))) <= reach * (1.0 + 1e-5) + 1e-6);
+            }
+            for t in output.triangles() {
+                let [a, b, c] = t.map(|v| anchor(v as usize));
+                let n0 = cross(sub(b, a), sub(c, a));
+                let [a, b, c] = t.map(|v| to_f64(placed[v as usize]));
+                let n1 = cross(sub(b, a), sub(c, a));
+                if norm(n0) > 0.0 {
+                    // The bound, with room for the rounding to f32.
+                    proptest::prop_assert!(dot(n0, n1) > (MIN_NORMAL_COSINE - 1e-3) * norm(n0) * norm(n1));
+                }
+            }
+        }
+    }
+
     #[test]
     fn too_many_or_repeated_seeds_are_errors() {
         let sphere = icosphere(1);
