@@ -1,8 +1,8 @@
 //! `meshsimplify bench DIR [--ratios 0.05,0.1,0.2,0.5] [--methods neural,qem,pc+remesh]
 //! [--samples 50000] [--seed S] [--neural-weights FILE] [--keep-positions] [--fill-holes [K]]
-//! [--json] [--json-out FILE]`: every
-//! method at every ratio on every mesh of a folder, scored like `meshsimplify eval` and printed
-//! in the layout of thesis Table 6.1 (CD, WA, LE, NE and seconds per mesh, means over files).
+//! [--json] [--json-out FILE]`: every method at every ratio on every mesh of a folder, scored
+//! like `meshsimplify eval` and printed in the layout of thesis Table 6.1 (CD, WA, LE, NE and
+//! seconds per mesh, means over files).
 //!
 //! Files run one after another (each method and the eigen-solves of LE use every core), so the
 //! seconds are comparable. A file that cannot be read, or a method that fails on a file, is

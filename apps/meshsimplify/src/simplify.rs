@@ -1,8 +1,8 @@
 //! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem|neural|pc+remesh]
 //! [--max-error E] [--weights FILE] [--fill-holes [K]] [--keep-positions] [--seed S]
-//! [--preview PNG [--wireframe]] [--force] [--json]`: simplify a mesh file to a target size, or every mesh file of a folder
-//! IN into the folder OUT (same names; files in parallel; a failed file never stops the
-//! others, and the exit code says whether any failed).
+//! [--preview PNG [--wireframe]] [--force] [--json]`: simplify a mesh file to a target size,
+//! or every mesh file of a folder IN into the folder OUT (same names; files in parallel; a
+//! failed file never stops the others, and the exit code says whether any failed).
 //!
 //! Any format the geometry crate reads and writes (OBJ, PLY, OFF, glTF/GLB; the output format
 //! follows OUT's extension, written atomically). Every argument is checked before anything is

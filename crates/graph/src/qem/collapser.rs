@@ -337,10 +337,12 @@ impl Collapser {
                     continue;
                 }
                 let (normal, _) = corner_normal(faces[f as usize].map(position));
-                let (pa, pb) = (position(a), position(b));
-                let e = sub(pb, pa);
-                let w = options.boundary_weight * dot(e, e);
-                let q = Quadric::from_plane(cross(e, normal), pa, w);
+                let q = Quadric::border_plane(
+                    position(a),
+                    position(b),
+                    normal,
+                    options.boundary_weight,
+                );
                 quadrics[a as usize] += q;
                 quadrics[b as usize] += q;
             } else {

@@ -2,9 +2,10 @@
 //! decimation itself ([`decimate`], algorithm and guarantees in `decimation.rs`), the plane
 //! quadrics it sums ([`Quadric`]), QEM vertex selection for point clouds on a mesh
 //! ([`qem_vertices`], thesis ch. 5.5) and the quadric placement of selected vertices
-//! ([`region_quadric_placement`], for the neural mesh simplifier of ch. 6). The other files are the decimation's parts: welding,
-//! vertex records and collapses, edge placement, validity checks, candidate sorting,
-//! speculative parallel checks, memory warm-up and the changed-vertex sets.
+//! ([`region_quadric_placement`], for the neural mesh simplifier of ch. 6). The other files
+//! are the decimation's parts: welding, vertex records and collapses, edge placement,
+//! validity checks, candidate sorting, speculative parallel checks, memory warm-up and the
+//! changed-vertex sets.
 
 mod candidates;
 mod collapse_checks;

@@ -14,6 +14,8 @@
 
 use std::ops::{Add, AddAssign};
 
+use meshgnn_geometry::vec3::{cross, dot, sub};
+
 /// A symmetric 4×4 quadric `[[A, b], [bᵀ, c]]` (A 3×3 symmetric), the sum of weighted plane
 /// quadrics. Eq. (GH97, §4): `Δ(v) = vᵀ Q v`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -57,6 +59,22 @@ impl Quadric {
             b: [w * n[0] * d, w * n[1] * d, w * n[2] * d],
             c: w * d * d,
         }
+    }
+
+    /// The border plane of an open edge `a → b` of a face with normal `face_normal`: through
+    /// the edge, perpendicular to the face, weighted by `weight · |b − a|²`. Summed into both
+    /// ends' quadrics, it holds a border on its line (GH97 §6: "boundary constraint planes").
+    ///
+    /// ```
+    /// use meshgnn_graph::Quadric;
+    /// // The edge (0,0,0) → (2,0,0) of a face in z = 0: the plane y = 0, weight 4.
+    /// let q = Quadric::border_plane([0.0; 3], [2.0, 0.0, 0.0], [0.0, 0.0, 1.0], 1.0);
+    /// assert!((q.evaluate([5.0, 3.0, 1.0]) - 4.0 * 9.0).abs() < 1e-12);
+    /// ```
+    #[inline]
+    pub fn border_plane(a: [f64; 3], b: [f64; 3], face_normal: [f64; 3], weight: f64) -> Self {
+        let e = sub(b, a);
+        Self::from_plane(cross(e, face_normal), a, weight * dot(e, e))
     }
 
     /// `Q(v) = vᵀAv + 2bᵀv + c`: the weighted sum of squared distances of `v` to the planes.

@@ -67,7 +67,8 @@ pub fn region_quadric_placement(
         });
     }
     let region = geodesic_voronoi_regions(input, seeds)?;
-    let anchors: Vec<[f64; 3]> = selected[..seeds.len()].iter().map(|&p| to_f64(p)).collect();
+    // The selected positions; the first `seeds.len()` are the anchors of the solves.
+    let anchors: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
     let quadrics = region_quadrics(input, &region, seeds.len());
     let mut reach = vec![0.0f64; seeds.len()];
     for (p, &r) in input.vertices().iter().zip(&region) {
@@ -75,7 +76,7 @@ pub fn region_quadric_placement(
             *reach = reach.max(norm(sub(to_f64(*p), anchors[r as usize])));
         }
     }
-    let mut placed: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
+    let mut placed = anchors.clone();
     for (o, (quadric, anchor)) in quadrics.iter().zip(&anchors).enumerate() {
         if let Some(p) = quadric.regularized_point(*anchor, ANCHOR_STRENGTH)
             && norm(sub(p, *anchor)) <= reach[o]
@@ -113,12 +114,7 @@ fn region_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadr
     for (e, &[a, b]) in topology.edges().iter().enumerate() {
         if let [incidence] = topology.incidences(e) {
             let (normal, _) = face_normal(&input.triangles()[incidence.face as usize]);
-            let edge = sub(position(b), position(a));
-            let plane = Quadric::from_plane(
-                cross(edge, normal),
-                position(a),
-                boundary_weight * dot(edge, edge),
-            );
+            let plane = Quadric::border_plane(position(a), position(b), normal, boundary_weight);
             add(a, plane);
             add(b, plane);
         }
@@ -126,38 +122,29 @@ fn region_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadr
     quadrics
 }
 
-/// Puts selected vertices back at their anchors until no face of `output` turns by more than
+/// Puts moved vertices back at their anchors until no face of `output` turns by more than
 /// acos([`MIN_NORMAL_COSINE`]) from its normal at the anchors (faces degenerate there are not
 /// judged). Terminates: each round puts back at least one vertex or stops.
 fn undo_flipping_moves(output: &TriMesh, anchors: &[[f64; 3]], placed: &mut [[f64; 3]]) {
-    let normal = |positions: &dyn Fn(u32) -> [f64; 3], t: &[u32; 3]| {
-        let [p0, p1, p2] = t.map(positions);
+    let normal = |positions: &[[f64; 3]], t: &[u32; 3]| {
+        let [p0, p1, p2] = t.map(|v| positions[v as usize]);
         cross(sub(p1, p0), sub(p2, p0))
     };
-    let before: Vec<[f64; 3]> = {
-        let at_anchor = |v: u32| {
-            anchors
-                .get(v as usize)
-                .copied()
-                .unwrap_or(to_f64(output.vertices()[v as usize]))
-        };
-        output
-            .triangles()
-            .iter()
-            .map(|t| normal(&at_anchor, t))
-            .collect()
-    };
+    let before: Vec<[f64; 3]> = output
+        .triangles()
+        .iter()
+        .map(|t| normal(anchors, t))
+        .collect();
     loop {
         let mut put_back: Vec<u32> = Vec::new();
         for (t, n0) in output.triangles().iter().zip(&before) {
-            let n1 = normal(&|v| placed[v as usize], t);
+            let n1 = normal(placed, t);
             let turned = dot(*n0, n1) <= MIN_NORMAL_COSINE * norm(*n0) * norm(n1);
             if norm(*n0) > 0.0 && turned {
-                put_back.extend(t.iter().filter(|&&v| {
-                    anchors
-                        .get(v as usize)
-                        .is_some_and(|a| placed[v as usize] != *a)
-                }));
+                put_back.extend(
+                    t.iter()
+                        .filter(|&&v| placed[v as usize] != anchors[v as usize]),
+                );
             }
         }
         if put_back.is_empty() {

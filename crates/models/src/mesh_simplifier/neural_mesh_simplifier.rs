@@ -438,16 +438,21 @@ mod tests {
         NeuralMeshSimplifier::new(vb, &config).unwrap()
     }
 
-    #[test]
-    fn output_is_edge_manifold_seeded_and_in_the_input_units() {
-        let m = model();
+    /// icosphere(3) (642 vertices) scaled to radius 40 around (7, 0, −3).
+    fn offset_sphere() -> TriMesh {
         let sphere = meshgnn_geometry::icosphere(3);
         let big: Vec<[f32; 3]> = sphere
             .vertices()
             .iter()
             .map(|p| [p[0] * 40.0 + 7.0, p[1] * 40.0, p[2] * 40.0 - 3.0])
             .collect();
-        let mesh = TriMesh::new(big, sphere.triangles().to_vec()).unwrap();
+        TriMesh::new(big, sphere.triangles().to_vec()).unwrap()
+    }
+
+    #[test]
+    fn output_is_edge_manifold_seeded_and_in_the_input_units() {
+        let m = model();
+        let mesh = offset_sphere();
         let selection = NeuralSimplifyOptions {
             keep_positions: true,
             ..Default::default()
@@ -474,13 +479,7 @@ mod tests {
         // On a sphere every region's quadric optimum lies just outside it (the coarse faces
         // are chords); the faces are the selection's.
         let m = model();
-        let sphere = meshgnn_geometry::icosphere(3);
-        let big: Vec<[f32; 3]> = sphere
-            .vertices()
-            .iter()
-            .map(|p| [p[0] * 40.0 + 7.0, p[1] * 40.0, p[2] * 40.0 - 3.0])
-            .collect();
-        let mesh = TriMesh::new(big, sphere.triangles().to_vec()).unwrap();
+        let mesh = offset_sphere();
         let keep = NeuralSimplifyOptions {
             keep_positions: true,
             ..Default::default()
