@@ -1,7 +1,7 @@
 //! The graph the edge predictor works on (thesis ch. 6.3.2): the mesh adjacency extended by a
 //! k-NN graph over the sampled vertices (k = 15, ch. 6.4) so that no sampled vertex is
-//! isolated, and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) precomputed on the host,
-//! so the product itself is a gather, a multiply and a scatter-add that autograd follows.
+//! isolated, and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) with the structure its
+//! terms are walked from in every pass ([`super::simplified_adjacency`]).
 //!
 //! # Conventions
 //! - `A` in eq. 6.4 is the *extended* adjacency with self-loops (`A_ext + I`): with the
@@ -11,8 +11,9 @@
 //!   them a sampled vertex would have no weight on itself in `Ŝ`.
 //! - Attention slots: row `i` lists `i` itself first, then its extended neighbours in
 //!   increasing order, padded with the empty slot `N` ([`NeighbourSlots`]).
+//! - `A` is undirected: an adjacency entry one way counts both ways.
 //! - `A_s` is stored as its non-zero pattern `pairs` (`(a, b)` in sampled-vertex numbering,
-//!   `a ≠ b`, sorted) and, per contributing term, the two attention entries it multiplies.
+//!   `a ≠ b`, sorted).
 //! - Beyond the thesis, `A_s` is evaluated only on pairs of sampled vertices that are linked
 //!   in the extended graph (a mesh edge or a k-NN link between them). The full product links
 //!   two sampled vertices whenever some mesh edge joins two vertices attending to them: on
@@ -20,12 +21,15 @@
 //!   120 050 candidate triangles for 120 vertices (measured), far beyond what a face classifier
 //!   can score or a surface needs.
 
+use std::sync::Arc;
+
 use candle_core::{Device, Tensor};
 use meshgnn_geometry::SpatialIndex;
 use meshgnn_graph::CsrMatrix;
 use rayon::prelude::*;
 
 use super::NeighbourSlots;
+use super::simplified_adjacency::{SimplifiedAdjacencyPattern, simplified_adjacency};
 use crate::{Error, Result};
 
 /// The extended graph over `N` vertices with `M` of them sampled, and the structure of the
@@ -40,11 +44,8 @@ pub struct ExtendedGraph {
     pub(crate) attention_mask: Tensor,
     /// Non-zero pattern of `A_s`, `(a, b)` sorted, `a ≠ b`.
     pairs: Vec<[u32; 2]>,
-    /// For every product term: the flat attention entries `i·W + s` of `Ŝ[i, a]` and `Ŝ[j, b]`.
-    term_left: Tensor,
-    term_right: Tensor,
-    /// For every product term: the index in `pairs` it adds to.
-    term_pair: Tensor,
+    /// What the terms of eq. 6.4 on `pairs` are walked from.
+    pattern: Arc<SimplifiedAdjacencyPattern>,
     sampled: Vec<u32>,
 }
 
@@ -82,6 +83,14 @@ impl ExtendedGraph {
             }
         }
         let mut rows = adjacency.off_diagonal_rows()?;
+        let reversed: Vec<(u32, u32)> = rows
+            .iter()
+            .enumerate()
+            .flat_map(|(i, row)| row.iter().map(move |&j| (j, i as u32)))
+            .collect();
+        for (j, i) in reversed {
+            rows[j as usize].push(i);
+        }
         if sampled.len() >= 2 && k > 0 {
             let sampled_points: Vec<[f32; 3]> =
                 sampled.iter().map(|&i| points[i as usize]).collect();
@@ -131,76 +140,22 @@ impl ExtendedGraph {
                 (0..width).map(move |s| if s < row.len() { 0.0 } else { EMPTY_SLOT_LOGIT })
             })
             .collect();
-        // Ŝ row i: (flat attention entry, sampled position) of every sampled slot of row i.
-        let s_hat: Vec<Vec<(u32, u32)>> = attention_rows
+        let pattern = SimplifiedAdjacencyPattern::new(&rows, width, &sample_position, &links)
+            .map_err(|reason| Error::Invalid {
+                what: "extended graph".into(),
+                reason,
+            })?;
+        let pairs = links
             .iter()
             .enumerate()
-            .map(|(i, row)| {
-                row.iter()
-                    .enumerate()
-                    .filter_map(|(s, &j)| {
-                        let a = sample_position[j as usize];
-                        (a != u32::MAX).then_some(((i * width + s) as u32, a))
-                    })
-                    .collect()
-            })
+            .flat_map(|(a, row)| row.iter().map(move |&b| [a as u32, b]))
             .collect();
-        // Column a of Ŝ: the (vertex i, flat attention entry) pairs whose row holds sampled
-        // vertex a, i increasing.
-        let mut columns: Vec<Vec<(u32, u32)>> = vec![Vec::new(); sampled.len()];
-        for (i, left) in s_hat.iter().enumerate() {
-            for &(p, a) in left {
-                columns[a as usize].push((i as u32, p));
-            }
-        }
-        // Terms of A_s[a, b] = Σ_i Σ_{j ∈ row i} Ŝ[i, a] Ŝ[j, b] (the row of i holds i itself),
-        // generated per a and ordered by (b, p, q) within it (each packed into the three low
-        // 32-bit words of a u128), so that no global sort is needed: the order is (a, b, p, q).
-        let per_sample: Vec<Vec<u128>> = columns
-            .par_iter()
-            .enumerate()
-            .map(|(a, column)| {
-                let linked = &links[a];
-                let mut out = Vec::new();
-                for &(i, p) in column {
-                    for &j in &attention_rows[i as usize] {
-                        for &(q, b) in &s_hat[j as usize] {
-                            if linked.binary_search(&b).is_ok() {
-                                let words = [b, p, q].map(u128::from);
-                                out.push(words[0] << 64 | words[1] << 32 | words[2]);
-                            }
-                        }
-                    }
-                }
-                out.sort_unstable();
-                out
-            })
-            .collect();
-        let word = |t: u128, k: u32| (t >> (32 * (2 - k))) as u32;
-        let mut pairs: Vec<[u32; 2]> = Vec::new();
-        let mut term_pair = Vec::new();
-        let mut term_left = Vec::new();
-        let mut term_right = Vec::new();
-        for (a, terms) in per_sample.iter().enumerate() {
-            for &t in terms {
-                let pair = [a as u32, word(t, 0)];
-                if pairs.last() != Some(&pair) {
-                    pairs.push(pair);
-                }
-                term_pair.push((pairs.len() - 1) as u32);
-                term_left.push(word(t, 1));
-                term_right.push(word(t, 2));
-            }
-        }
-        let count = term_pair.len();
         Ok(Self {
             conv_slots,
             attention_mask: Tensor::from_vec(mask, (n, width), device)?,
             attention_slots,
             pairs,
-            term_left: Tensor::from_vec(term_left, count, device)?,
-            term_right: Tensor::from_vec(term_right, count, device)?,
-            term_pair: Tensor::from_vec(term_pair, count, device)?,
+            pattern: Arc::new(pattern),
             sampled: sampled.to_vec(),
         })
     }
@@ -219,11 +174,7 @@ impl ExtendedGraph {
     /// Eq. 6.3-6.4: the values of `A_s` on [`Self::pairs`] from the attention weights
     /// `attention: (N, W)` (rows over the attention slots).
     pub(crate) fn simplified_adjacency(&self, attention: &Tensor) -> Result<Tensor> {
-        let flat = attention.flatten_all()?;
-        let left = flat.index_select(&self.term_left, 0)?;
-        let right = flat.index_select(&self.term_right, 0)?;
-        let zeros = Tensor::zeros(self.pairs.len(), flat.dtype(), flat.device())?;
-        Ok(zeros.index_add(&self.term_pair, &(left * right)?, 0)?)
+        Ok(simplified_adjacency(attention, &self.pattern)?)
     }
 
     /// The index in [`Self::pairs`] of `(a, b)`, when it is non-zero.

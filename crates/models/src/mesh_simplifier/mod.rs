@@ -24,6 +24,7 @@ mod neural_mesh_simplifier;
 mod op_operands;
 mod point_sampler;
 mod simplification_loss;
+mod simplified_adjacency;
 mod simplifier_training;
 mod slot_dot_products;
 mod tri_conv;
