@@ -15,10 +15,12 @@
 //!    centre other than the corners, clamped to `[−1, 1]` (negative: some vertex intrudes, as
 //!    in no Delaunay triangle).
 //!
-//! Positions only, so computed once on the host per pass, in the unit-sphere frame.
+//! Positions only, so computed once on the host per pass, in the unit-sphere frame, one
+//! triangle per parallel task.
 
 use meshgnn_geometry::SpatialIndex;
 use meshgnn_geometry::vec3::{cross, dot, norm, sub, to_f64};
+use rayon::prelude::*;
 
 use crate::Result;
 
@@ -36,41 +38,42 @@ pub fn candidate_features(
     triangles: &[[u32; 3]],
 ) -> Result<Vec<f32>> {
     let index = SpatialIndex::new(corners)?;
-    let mut out = Vec::new();
     let spacing: Vec<f64> = (0..corners.len())
-        .map(|i| {
-            index.nearest(&corners[i], 1, Some(i as u32), &mut out);
+        .into_par_iter()
+        .map_init(Vec::new, |out, i| {
+            index.nearest(&corners[i], 1, Some(i as u32), out);
             out.first().map_or(1.0, |&(d2, _)| f64::from(d2).sqrt())
         })
         .collect();
-    let mut features = Vec::with_capacity(triangles.len() * CANDIDATE_FEATURES);
-    for t in triangles {
-        let [a, b, c] = t.map(|v| to_f64(corners[v as usize]));
-        let edges = [sub(b, a), sub(c, b), sub(a, c)];
-        let lengths = edges.map(norm);
-        let normal = cross(edges[0], sub(c, a));
-        let area2 = norm(normal);
-        let mean_normal = t
-            .iter()
-            .map(|&v| to_f64(normals[v as usize]))
-            .fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
-        let agreement = match (area2, norm(mean_normal)) {
-            (x, y) if x > 0.0 && y > 0.0 => dot(normal, mean_normal).abs() / (x * y),
-            _ => 0.0,
-        };
-        let h = t.iter().map(|&v| spacing[v as usize]).sum::<f64>() / 3.0;
-        let h = if h > 0.0 { h } else { 1.0 };
-        let longest = lengths.iter().copied().fold(0.0, f64::max);
-        let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
-        let smallest_angle = (0..3)
-            .map(|k| {
-                let (u, v) = (edges[k], edges[(k + 2) % 3]);
-                let cos = -dot(u, v) / (lengths[k] * lengths[(k + 2) % 3]).max(f64::MIN_POSITIVE);
-                cos.clamp(-1.0, 1.0).acos()
-            })
-            .fold(f64::INFINITY, f64::min);
-        let emptiness = circumsphere_emptiness(&index, [a, b, c], t, &mut out);
-        features.extend(
+    let rows: Vec<[f32; CANDIDATE_FEATURES]> = triangles
+        .par_iter()
+        .map_init(Vec::new, |out, t| {
+            let [a, b, c] = t.map(|v| to_f64(corners[v as usize]));
+            let edges = [sub(b, a), sub(c, b), sub(a, c)];
+            let lengths = edges.map(norm);
+            let normal = cross(edges[0], sub(c, a));
+            let area2 = norm(normal);
+            let mean_normal = t
+                .iter()
+                .map(|&v| to_f64(normals[v as usize]))
+                .fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
+            let agreement = match (area2, norm(mean_normal)) {
+                (x, y) if x > 0.0 && y > 0.0 => dot(normal, mean_normal).abs() / (x * y),
+                _ => 0.0,
+            };
+            let h = t.iter().map(|&v| spacing[v as usize]).sum::<f64>() / 3.0;
+            let h = if h > 0.0 { h } else { 1.0 };
+            let longest = lengths.iter().copied().fold(0.0, f64::max);
+            let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
+            let smallest_angle = (0..3)
+                .map(|k| {
+                    let (u, v) = (edges[k], edges[(k + 2) % 3]);
+                    let cos =
+                        -dot(u, v) / (lengths[k] * lengths[(k + 2) % 3]).max(f64::MIN_POSITIVE);
+                    cos.clamp(-1.0, 1.0).acos()
+                })
+                .fold(f64::INFINITY, f64::min);
+            let emptiness = circumsphere_emptiness(&index, [a, b, c], t, out);
             [
                 agreement,
                 (longest / h).min(10.0),
@@ -78,9 +81,10 @@ pub fn candidate_features(
                 smallest_angle / std::f64::consts::FRAC_PI_3,
                 emptiness,
             ]
-            .map(|f| f as f32),
-        );
-    }
+            .map(|f| f as f32)
+        })
+        .collect();
+    let features = rows.into_flattened();
     Ok(features)
 }
 

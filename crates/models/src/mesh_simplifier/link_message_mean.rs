@@ -83,16 +83,21 @@ fn forward<T: Real>(operands: &Operands<T>) -> Vec<T> {
         .enumerate()
         .for_each(|(task, rows)| {
             let mut hidden = vec![T::ZERO; c];
+            // Summed here and written once: a fresh output page that is read before it is
+            // written is first mapped to the shared zero page, then copied on the write,
+            // with a TLB flush on every core.
+            let mut sum = vec![T::ZERO; c];
             for (offset, row) in rows.chunks_mut(c).enumerate() {
                 let n = task * ROWS_PER_TASK + offset;
+                sum.fill(T::ZERO);
                 for slot in 0..k {
                     operands.hidden(n, slot, &mut hidden);
-                    for (o, &h) in row.iter_mut().zip(&hidden) {
-                        *o += if h > T::ZERO { h } else { T::ZERO };
+                    for (s, &h) in sum.iter_mut().zip(&hidden) {
+                        *s += if h > T::ZERO { h } else { T::ZERO };
                     }
                 }
-                for o in row.iter_mut() {
-                    *o = *o / count;
+                for (o, &s) in row.iter_mut().zip(&sum) {
+                    *o = s / count;
                 }
             }
         });

@@ -72,13 +72,18 @@ impl TriConv {
         // and runs once per triangle too. Equal to the printed order of operations up to
         // rounding, about `K·(9 + C_in)` times fewer multiplications.
         let first = &self.mlp[0];
-        let descriptors = graph.descriptors.to_dtype(features.dtype())?;
-        let projected = Tensor::cat(&[&descriptors, features], 1)?.matmul(&first.weight().t()?)?;
         let bias = match first.bias() {
             Some(bias) => bias.clone(),
             None => Tensor::zeros(output, features.dtype(), features.device())?,
         };
-        let mean = link_message_mean(&projected, &bias, &graph.neighbours)?;
+        // Scoped so that, outside training, the `(F, C)` projection is freed before the second
+        // layer allocates its own.
+        let mean = {
+            let descriptors = graph.descriptors.to_dtype(features.dtype())?;
+            let projected =
+                Tensor::cat(&[&descriptors, features], 1)?.matmul(&first.weight().t()?)?;
+            link_message_mean(&projected, &bias, &graph.neighbours)?
+        };
         Ok(self.mlp[1].forward(&mean)?)
     }
 }
