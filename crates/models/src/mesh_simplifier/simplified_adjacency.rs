@@ -391,6 +391,89 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Any symmetric graph, any sample, any attention: the dense product on the linked
+        /// pairs, and finite-difference gradients.
+        #[test]
+        fn any_graph_gives_the_dense_product_and_its_gradient(
+            n in 2usize..10,
+            edges in proptest::collection::vec(proptest::bool::weighted(0.35), 45),
+            sampled in proptest::collection::vec(proptest::bool::ANY, 10),
+            weights in proptest::collection::vec(0.05f64..1.0, 100),
+        ) {
+            let mut rows = vec![Vec::new(); n];
+            let mut e = 0;
+            for i in 0..n {
+                for j in i + 1..n {
+                    if edges[e] {
+                        rows[i].push(j as u32);
+                        rows[j].push(i as u32);
+                    }
+                    e += 1;
+                }
+            }
+            let picked: Vec<usize> = (0..n).filter(|&i| sampled[i]).collect();
+            proptest::prop_assume!(!picked.is_empty());
+            let mut position = vec![u32::MAX; n];
+            for (a, &i) in picked.iter().enumerate() {
+                position[i] = a as u32;
+            }
+            let linked: Vec<Vec<u32>> = picked
+                .iter()
+                .map(|&i| {
+                    let mut l: Vec<u32> = rows[i]
+                        .iter()
+                        .map(|&j| position[j as usize])
+                        .filter(|&b| b != u32::MAX)
+                        .collect();
+                    l.sort_unstable();
+                    l
+                })
+                .collect();
+            let width = rows.iter().map(Vec::len).max().unwrap_or(0) + 1;
+            let pattern =
+                Arc::new(SimplifiedAdjacencyPattern::new(&rows, width, &position, &linked).unwrap());
+            // Attention on the real slots `[i, N(i)…]`, 0 on the padding.
+            let values: Vec<f64> = (0..n * width)
+                .map(|p| if p % width <= rows[p / width].len() { weights[p] } else { 0.0 })
+                .collect();
+            let attention = Tensor::from_vec(values.clone(), (n, width), &Device::Cpu).unwrap();
+            let s_hat = |i: usize, a: usize| -> f64 {
+                std::iter::once(i as u32)
+                    .chain(rows[i].iter().copied())
+                    .position(|j| j as usize == picked[a])
+                    .map_or(0.0, |s| values[i * width + s])
+            };
+            let got: Vec<f64> =
+                simplified_adjacency(&attention, &pattern).unwrap().to_vec1().unwrap();
+            let mut pair = 0;
+            for (a, row) in linked.iter().enumerate() {
+                for &b in row {
+                    let mut dense = 0.0;
+                    for (i, row) in rows.iter().enumerate() {
+                        for j in std::iter::once(i as u32).chain(row.iter().copied()) {
+                            dense += s_hat(i, a) * s_hat(j as usize, b as usize);
+                        }
+                    }
+                    proptest::prop_assert!((got[pair] - dense).abs() <= 1e-12);
+                    pair += 1;
+                }
+            }
+            proptest::prop_assert_eq!(pair, got.len());
+            if !got.is_empty() {
+                let scale: Vec<f64> = (0..got.len()).map(|k| 1.0 + k as f64 * 0.37).collect();
+                let scale = Tensor::from_vec(scale, got.len(), &Device::Cpu).unwrap();
+                let worst = gradient_disagreement(&attention, |x| {
+                    (simplified_adjacency(x, &pattern)? * &scale)?.sum_all()
+                })
+                .unwrap();
+                proptest::prop_assert!(worst.relative_error <= 1e-6, "{:?}", worst);
+            }
+        }
+    }
+
     #[test]
     fn gradients_match_finite_differences() {
         let (pattern, rows, _) = pattern();
