@@ -23,8 +23,7 @@ use meshgnn_geometry::{
     unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, Target, balanced_sampling, hilbert_order, knn_graph, region_quadric_placement,
-    vertex_adjacency,
+    CsrMatrix, Target, balanced_sampling, hilbert_order, region_quadric_placement, vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -273,32 +272,27 @@ impl NeuralMeshSimplifier {
             });
         }
         let positions = unit_sphere_normalization(points)?.apply(points);
-        let rows: Vec<Vec<u32>> = match adjacency {
-            Some(adjacency) => adjacency.off_diagonal_rows()?,
-            None => {
-                let k = SAMPLER_CLOUD_NEIGHBOURS.min(points.len().saturating_sub(1));
-                if k == 0 {
-                    vec![Vec::new(); points.len()]
-                } else {
-                    knn_graph(&positions, k)?
-                        .indices
-                        .chunks(k)
-                        .map(<[u32]>::to_vec)
-                        .collect()
-                }
-            }
-        };
         let order = hilbert_order(&positions);
-        let mut rank = vec![0u32; order.len()];
-        for (r, &i) in order.iter().enumerate() {
-            rank[i as usize] = r as u32;
-        }
-        let laid_out_rows: Vec<Vec<u32>> = order
-            .iter()
-            .map(|&i| rows[i as usize].iter().map(|&j| rank[j as usize]).collect())
-            .collect();
-        let laid_out: Vec<f32> = order.iter().flat_map(|&i| positions[i as usize]).collect();
-        let slots = NeighbourSlots::from_rows(&laid_out_rows, &self.device)?;
+        let laid_out: Vec<[f32; 3]> = order.iter().map(|&i| positions[i as usize]).collect();
+        let slots = match adjacency {
+            Some(adjacency) => {
+                let mut rank = vec![0u32; order.len()];
+                for (r, &i) in order.iter().enumerate() {
+                    rank[i as usize] = r as u32;
+                }
+                let rows = adjacency.off_diagonal_rows()?;
+                let laid_out_rows: Vec<Vec<u32>> = order
+                    .iter()
+                    .map(|&i| rows[i as usize].iter().map(|&j| rank[j as usize]).collect())
+                    .collect();
+                NeighbourSlots::from_rows(&laid_out_rows, &self.device)?
+            }
+            None => match SAMPLER_CLOUD_NEIGHBOURS.min(points.len().saturating_sub(1)) {
+                0 => NeighbourSlots::from_rows(&vec![Vec::new(); points.len()], &self.device)?,
+                k => NeighbourSlots::from_knn(&laid_out, k, &self.device)?,
+            },
+        };
+        let laid_out: Vec<f32> = laid_out.into_flattened();
         let tensor = Tensor::from_vec(laid_out, (positions.len(), 3), &self.device)?;
         let laid_out_probabilities: Vec<f32> = self.sampler.forward(&tensor, &slots)?.to_vec1()?;
         let mut probabilities = vec![0f32; order.len()];
