@@ -11,7 +11,7 @@
 use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::{NeighbourSlots, neighbour_minimum};
+use super::{NeighbourSlots, neighbour_deviation_maximum};
 use crate::{Error, Result};
 
 /// Widths of a DevConv layer.
@@ -73,10 +73,10 @@ impl DevConv {
                 reason: format!("{n} rows for a graph over {} points", slots.len()),
             });
         }
-        // max_j W_θ(x_i − x_j) = W_θ x_i − min_j W_θ x_j: project once, then take the
-        // neighbours' minimum in place.
+        // max_j W_θ(x_i − x_j) = max_j (W_θ x_i − W_θ x_j): project once, then take the
+        // maximum over the neighbours in place.
         let projected = self.theta.forward(features)?;
-        let largest = (&projected - neighbour_minimum(&projected, slots.indices())?)?;
+        let largest = neighbour_deviation_maximum(&projected, slots.indices())?;
         Ok(self.phi.forward(&largest)?.relu()?)
     }
 }

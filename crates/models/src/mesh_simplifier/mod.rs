@@ -18,7 +18,7 @@ mod face_classifier;
 mod face_graph;
 mod incoming_links;
 mod link_message_mean;
-mod neighbour_minimum;
+mod neighbour_deviation_maximum;
 mod neighbour_slots;
 mod neural_mesh_simplifier;
 mod op_operands;
@@ -38,7 +38,7 @@ pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
 pub use face_graph::FaceGraph;
 pub use link_message_mean::link_message_mean;
-pub use neighbour_minimum::neighbour_minimum;
+pub use neighbour_deviation_maximum::neighbour_deviation_maximum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MIN_NEURAL_FACES, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,

@@ -4,7 +4,7 @@
 //! # Conventions
 //! - `indices` is `(N·W)` `u32`, row-major: row `i` holds the `W` neighbour slots of point `i`.
 //! - An empty slot holds [`NeighbourSlots::len`] (= N), one past the last point: the fused
-//!   operations that read the slots ([`super::neighbour_minimum`], [`super::slot_dot_products`])
+//!   operations that read the slots ([`super::neighbour_deviation_maximum`], [`super::slot_dot_products`])
 //!   skip it, so it never counts as a neighbour. (A mean layer pads differently,
 //!   [`crate::point_simplifier::NeighbourIndex`], weight 0.)
 //! - A point with no neighbour (an isolated vertex) lists itself once, so its relative

@@ -1,4 +1,4 @@
-//! What the fused graph operations (`neighbour_minimum`, `link_message_mean`,
+//! What the fused graph operations (`neighbour_deviation_maximum`, `link_message_mean`,
 //! `slot_dot_products`) share: the float arithmetic they are generic over and, to read their
 //! operands, the contiguous host slice of a storage
 //! in the forward pass, and a tensor as `f64` values in the backward pass (every backward pass
