@@ -1,7 +1,7 @@
 //! Eq. 6.3-6.4, `A_s[a, b] = Σ_i Σ_{j ∈ N(i) ∪ {i}} Ŝ[i, a] Ŝ[j, b]` (with `A = A_ext + I`),
 //! as one fused operation over the attention weights, on the pairs
 //! [`super::ExtendedGraph`] evaluates it on. Listing the product's terms first costs one
-//! entry per term: 107M terms (3.9 GB while sorted, 1.3 GB kept) and 6 s to list them for an
+//! entry per term: 107M terms (1.7 GB while sorted, 1.3 GB kept) and 6 s to list them for an
 //! 872k-face mesh at a tenth of its vertices; the structure they come from — which attention
 //! entries hold each sampled vertex, the rows, the sampled entries of each row — is a few
 //! entries per vertex, and the terms are walked from it in every pass instead.
@@ -29,7 +29,7 @@ const NAME: &str = "simplified adjacency";
 const SAMPLES_PER_TASK: usize = 64;
 
 /// Rows of variable length, stored flat.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct FlatRows<T> {
     starts: Vec<usize>,
     items: Vec<T>,
