@@ -84,8 +84,7 @@ pub fn candidate_features(
             .map(|f| f as f32)
         })
         .collect();
-    let features = rows.into_flattened();
-    Ok(features)
+    Ok(rows.into_flattened())
 }
 
 /// Feature 4 of the module docs; −1 (crowded) for a degenerate triangle, which has no circle.

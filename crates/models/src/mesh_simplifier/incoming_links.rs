@@ -3,11 +3,10 @@
 //! use it to gather, per row they own, what a forward scatter would have added, so that they
 //! run in parallel without races and add in a fixed order.
 
+use super::flat_rows::FlatRows;
+
 /// Links reversed for `count` targets; entries `≥ count` (empty slots) are skipped.
-pub(super) struct IncomingLinks {
-    starts: Vec<usize>,
-    positions: Vec<u32>,
-}
+pub(super) struct IncomingLinks(FlatRows<u32>);
 
 impl IncomingLinks {
     /// Reverses `links` (`links[p]`: the target of position `p`).
@@ -30,12 +29,15 @@ impl IncomingLinks {
                 next[l] += 1;
             }
         }
-        Self { starts, positions }
+        Self(FlatRows {
+            starts,
+            items: positions,
+        })
     }
 
     /// The positions whose link points to `target`, increasing.
     pub(super) fn of(&self, target: usize) -> &[u32] {
-        &self.positions[self.starts[target]..self.starts[target + 1]]
+        self.0.of(target)
     }
 }
 

@@ -16,6 +16,7 @@ mod edge_predictor;
 mod extended_graph;
 mod face_classifier;
 mod face_graph;
+mod flat_rows;
 mod incoming_links;
 mod link_message_mean;
 mod neighbour_deviation_maximum;

@@ -20,6 +20,7 @@ use std::sync::Arc;
 use candle_core::{CpuStorage, CustomOp1, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
+use super::flat_rows::FlatRows;
 use super::op_operands::{Real, contiguous, host_f64};
 
 /// The name in error messages.
@@ -27,33 +28,6 @@ const NAME: &str = "simplified adjacency";
 
 /// Sampled vertices per parallel task.
 const SAMPLES_PER_TASK: usize = 64;
-
-/// Rows of variable length, stored flat.
-#[derive(Debug)]
-struct FlatRows<T> {
-    starts: Vec<usize>,
-    items: Vec<T>,
-}
-
-impl<T> FlatRows<T> {
-    fn new(rows: impl IntoIterator<Item = impl IntoIterator<Item = T>>) -> Self {
-        let mut starts = vec![0];
-        let mut items = Vec::new();
-        for row in rows {
-            items.extend(row);
-            starts.push(items.len());
-        }
-        Self { starts, items }
-    }
-
-    fn len(&self) -> usize {
-        self.starts.len() - 1
-    }
-
-    fn of(&self, row: usize) -> &[T] {
-        &self.items[self.starts[row]..self.starts[row + 1]]
-    }
-}
 
 /// The structure of `A_s` over `N` points with `M` of them sampled: what the terms are walked
 /// from.
