@@ -3,6 +3,8 @@
 //! ([`crate::balanced_sampling`]) and to lay points out in memory so that a point's
 //! neighbours sit close to it (graph layers read every neighbour's row).
 
+use rayon::prelude::*;
+
 /// Bits per axis of the curve's grid.
 const CURVE_BITS: u32 = 16;
 
@@ -76,16 +78,17 @@ pub fn hilbert_order(points: &[[f32; 3]]) -> Vec<u32> {
     } else {
         0.0
     };
+    // Every key is distinct (the index breaks ties), so the parallel sort is deterministic.
     let mut keyed: Vec<(u64, u32)> = points
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(i, p)| {
             let cell = [0, 1, 2].map(|c| (f64::from(p[c] - lo[c]) * scale) as u32);
             (hilbert_index(cell), i as u32)
         })
         .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+    keyed.par_sort_unstable();
+    keyed.into_par_iter().map(|(_, i)| i).collect()
 }
 
 #[cfg(test)]

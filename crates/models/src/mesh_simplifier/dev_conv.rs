@@ -11,7 +11,7 @@
 use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::{NeighbourSlots, neighbour_deviation_maximum};
+use super::{NeighbourSlots, linear_relu, neighbour_deviation_maximum};
 use crate::{Error, Result};
 
 /// Widths of a DevConv layer.
@@ -74,10 +74,13 @@ impl DevConv {
             });
         }
         // max_j W_θ(x_i − x_j) = max_j (W_θ x_i − W_θ x_j): project once, then take the
-        // maximum over the neighbours in place.
+        // maximum over the neighbours in place. Each `(N, C)` intermediate is dropped as soon
+        // as the next exists: at inference nothing else holds them, and the fewer live at
+        // once, the less fresh memory the kernel must fault in and zero.
         let projected = self.theta.forward(features)?;
         let largest = neighbour_deviation_maximum(&projected, slots.indices())?;
-        Ok(self.phi.forward(&largest)?.relu()?)
+        drop(projected);
+        Ok(linear_relu(largest, &self.phi)?)
     }
 }
 

@@ -23,7 +23,8 @@ use meshgnn_geometry::{
     unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, Target, balanced_sampling, hilbert_order, region_quadric_placement, vertex_adjacency,
+    CsrMatrix, Target, hilbert_order, region_quadric_placement, systematic_sampling,
+    vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -253,8 +254,8 @@ impl NeuralMeshSimplifier {
     ///
     /// The network sees the points laid out along a Hilbert curve, so that the neighbour rows
     /// each DevConv layer reads sit near each other in memory (a cloud in random order
-    /// scatters them: 1M points, 2× the time); the probabilities return to the input's order
-    /// before the draw, so the result does not depend on the layout.
+    /// scatters them: 1M points, 2× the time); the balanced draw runs along the same curve,
+    /// so the result is [`meshgnn_graph::balanced_sampling`]'s over the input's order.
     pub fn sample_points(
         &self,
         points: &[[f32; 3]],
@@ -295,11 +296,9 @@ impl NeuralMeshSimplifier {
         let laid_out: Vec<f32> = laid_out.into_flattened();
         let tensor = Tensor::from_vec(laid_out, (positions.len(), 3), &self.device)?;
         let laid_out_probabilities: Vec<f32> = self.sampler.forward(&tensor, &slots)?.to_vec1()?;
-        let mut probabilities = vec![0f32; order.len()];
-        for (&i, &p) in order.iter().zip(&laid_out_probabilities) {
-            probabilities[i as usize] = p;
-        }
-        Ok(balanced_sampling(&positions, &probabilities, target, seed)?)
+        // The balanced draw is the systematic one along this same curve.
+        let along_curve = systematic_sampling(&laid_out_probabilities, target, seed)?;
+        Ok(along_curve.into_iter().map(|r| order[r as usize]).collect())
     }
 
     /// [`Self::simplify`] aiming at a face count or ratio ([`Target::vertex_count`] vertices):
