@@ -12,6 +12,7 @@
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- [RES] [RATIO]
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- train EPOCHS [RES] [LR] [PER_FAMILY]
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- eval WEIGHTS RES...
+//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- ceiling WEIGHTS RATIO FILE...
 //! ```
 
 use candle_core::{DType, Device};
@@ -20,7 +21,7 @@ use meshgnn_data::{ShapeFamily, shape_mesh};
 use meshgnn_geometry::{TriMesh, boundary_loops, sample_surface, voronoi_dual_triangles};
 use meshgnn_graph::{
     DecimationOptions, FpsStart, Target, balanced_sampling, decimate, fast_farthest_point_sampling,
-    weighted_sampling,
+    qem_vertices, weighted_sampling,
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
 use meshgnn_models::mesh_simplifier::{
@@ -125,6 +126,48 @@ fn evaluate(args: &[String]) -> AnyResult<()> {
     Ok(())
 }
 
+/// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, the Voronoi dual of the trained
+/// sampler's picks (what the face classifier learnt to reproduce) and of QEM's own vertex
+/// selection, each as a Chamfer distance over QEM's at the dual's face count: the best the
+/// model can reach by matching its targets.
+fn dual_ceiling(args: &[String]) -> AnyResult<()> {
+    let [weights, ratio, files @ ..] = args else {
+        return Err("give the weights file, the vertex ratio and mesh files".into());
+    };
+    let model = NeuralMeshSimplifier::load(weights)?;
+    let ratio: f64 = ratio.parse()?;
+    println!("file\tfaces\tpicks\tdual_faces\tsampler_dual/qem\tqem_picks_dual/qem");
+    for file in files {
+        let mesh = meshgnn_geometry::read_mesh(file)?;
+        let m = ((mesh.vertex_count() as f64) * ratio).round() as usize;
+        let input = MeshInput::new(&mesh, model.device())?;
+        let dual = dual_mesh(&mesh, &model.forward(&input, m, 0)?.sampled.indices)?;
+        let qem = decimate(
+            &mesh,
+            &DecimationOptions {
+                target: Target::Faces(dual.face_count()),
+                ..Default::default()
+            },
+        )?;
+        let cd_qem = surface_chamfer(&mesh, &qem.mesh)?;
+        // QEM's selection stops short on some meshes (non-manifold regions): no figure then.
+        let qem_picks_dual = match qem_vertices(&mesh, m) {
+            Ok(selection) => format!(
+                "{:.2}",
+                surface_chamfer(&mesh, &dual_mesh(&mesh, &selection.indices)?)? / cd_qem
+            ),
+            Err(_) => "-".into(),
+        };
+        println!(
+            "{file}\t{}\t{m}\t{}\t{:.2}\t{qem_picks_dual}",
+            mesh.face_count(),
+            dual.face_count(),
+            surface_chamfer(&mesh, &dual)? / cd_qem
+        );
+    }
+    Ok(())
+}
+
 fn train_model(args: &[String]) -> AnyResult<()> {
     let epochs: usize = args.first().map_or(Ok(10), |s| s.parse())?;
     let resolution: usize = args.get(1).map_or(Ok(32), |s| s.parse())?;
@@ -182,6 +225,7 @@ fn main() -> AnyResult<()> {
     match args.get(1).map(String::as_str) {
         Some("train") => return train_model(&args[2..]),
         Some("eval") => return evaluate(&args[2..]),
+        Some("ceiling") => return dual_ceiling(&args[2..]),
         _ => {}
     }
     let resolution: usize = args.get(1).map_or(Ok(40), |s| s.parse())?;
