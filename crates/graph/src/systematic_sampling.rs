@@ -121,6 +121,31 @@ mod tests {
         assert_eq!(systematic_sampling(&[1.0; 10], 10, 1).unwrap().len(), 10);
     }
 
+    proptest::proptest! {
+        #[test]
+        fn k_distinct_positions_and_every_item_worth_a_whole_step_taken(
+            weights in proptest::collection::vec(0.0f32..5.0, 1..300),
+            frac in 0.0f64..=1.0,
+            seed in 0u64..1000,
+        ) {
+            let k = (weights.len() as f64 * frac) as usize;
+            let picked = systematic_sampling(&weights, k, seed).unwrap();
+            let mut distinct = picked.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            proptest::prop_assert_eq!(distinct.len(), k);
+            proptest::prop_assert!(picked.iter().all(|&p| (p as usize) < weights.len()));
+            // An item whose weight spans a whole step holds one of the equally spaced points.
+            let total: f64 = weights.iter().map(|&w| f64::from(w)).sum();
+            for (i, &w) in weights.iter().enumerate() {
+                if k > 0 && f64::from(w) * k as f64 >= total * (1.0 + 1e-9) {
+                    proptest::prop_assert!(picked.contains(&(i as u32)), "item {} ({})", i, w);
+                }
+            }
+            proptest::prop_assert_eq!(systematic_sampling(&weights, k, seed).unwrap(), picked);
+        }
+    }
+
     #[test]
     fn bad_input_is_an_error() {
         assert!(systematic_sampling(&[1.0; 3], 4, 0).is_err());
