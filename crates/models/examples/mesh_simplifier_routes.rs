@@ -136,7 +136,7 @@ fn dual_ceiling(args: &[String]) -> AnyResult<()> {
     };
     let model = NeuralMeshSimplifier::load(weights)?;
     let ratio: f64 = ratio.parse()?;
-    println!("file\tfaces\tpicks\tdual_faces\tsampler_dual/qem\tqem_picks_dual/qem");
+    println!("file\tfaces\tpicks\tdual_faces\tdual_WA\tsampler_dual/qem\tqem_picks_dual/qem");
     for file in files {
         let mesh = meshgnn_geometry::read_mesh(file)?;
         let m = ((mesh.vertex_count() as f64) * ratio).round() as usize;
@@ -150,19 +150,24 @@ fn dual_ceiling(args: &[String]) -> AnyResult<()> {
             },
         )?;
         let cd_qem = surface_chamfer(&mesh, &qem.mesh)?;
-        // QEM's selection stops short on some meshes (non-manifold regions): no figure then.
+        // A dual without faces has no distance; QEM's selection stops short on some meshes
+        // (non-manifold regions): no figure then.
+        let over_qem = |dual: &TriMesh| -> AnyResult<String> {
+            Ok(match dual.face_count() {
+                0 => "-".into(),
+                _ => format!("{:.2}", surface_chamfer(&mesh, dual)? / cd_qem),
+            })
+        };
         let qem_picks_dual = match qem_vertices(&mesh, m) {
-            Ok(selection) => format!(
-                "{:.2}",
-                surface_chamfer(&mesh, &dual_mesh(&mesh, &selection.indices)?)? / cd_qem
-            ),
+            Ok(selection) => over_qem(&dual_mesh(&mesh, &selection.indices)?)?,
             Err(_) => "-".into(),
         };
         println!(
-            "{file}\t{}\t{m}\t{}\t{:.2}\t{qem_picks_dual}",
+            "{file}\t{}\t{m}\t{}\t{:.1}\t{}\t{qem_picks_dual}",
             mesh.face_count(),
             dual.face_count(),
-            surface_chamfer(&mesh, &dual)? / cd_qem
+            watertightness(&dual),
+            over_qem(&dual)?
         );
     }
     Ok(())
