@@ -8,8 +8,9 @@
 //! # Conventions
 //! - An item whose weight spans several points is taken once; the extra points take the next
 //!   items not yet taken, so the result always has `k` distinct positions.
-//! - The result is in sequence order; zero weights are taken only when the positive weights
-//!   cannot fill `k` (then in sequence order as well).
+//! - The drawn positions come in sequence order; zero weights are taken only when the
+//!   positive weights cannot fill `k` (or rounding leaves the last point off the end): then
+//!   the first free positions follow, again in sequence order.
 
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
