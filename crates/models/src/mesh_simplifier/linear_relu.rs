@@ -1,7 +1,7 @@
 //! `ReLU(x Wᵀ + b)`, a linear layer and its non-linearity, with the bias and the ReLU fused
 //! into one pass over the product. Unfused, candle writes the product, the biased product and
-//! the rectified one: two `(N, C)` tensors more than needed per layer (256 MB each for a
-//! 1M-point cloud at 64 channels), each read back and freshly faulted in. The output is
+//! the rectified one: one `(N, C)` tensor more than needed per layer (256 MB for a 1M-point
+//! cloud at 64 channels), written, read back and freshly faulted in. The output is
 //! bit-identical to `linear.forward(x)?.relu()?`.
 //!
 //! The backward pass of the fused part: the gradient passes where the output is positive, to
