@@ -35,7 +35,7 @@ pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
 pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};
 pub use qem::{
     Decimation, DecimationOptions, QemVertices, Quadric, StopReason, Target, decimate,
-    decimate_with_progress, qem_vertices, region_quadric_placement,
+    decimate_keeping, decimate_with_progress, qem_vertices, region_quadric_placement,
 };
 
 pub use balanced_sampling::balanced_sampling;

@@ -4,7 +4,9 @@
 use std::collections::HashMap;
 
 use meshgnn_geometry::{TriMesh, grid_plane, icosphere, subdivided_cube};
-use meshgnn_graph::{Decimation, DecimationOptions, Error, StopReason, Target, decimate};
+use meshgnn_graph::{
+    Decimation, DecimationOptions, Error, StopReason, Target, decimate, decimate_keeping,
+};
 
 fn options(target: Target) -> DecimationOptions {
     DecimationOptions {
@@ -460,6 +462,50 @@ fn keep_original_positions_places_vertices_on_inputs() {
         assert_eq!(out.vertex_map[source] as usize, j);
     }
     assert_closed_manifold(&out.mesh);
+}
+
+#[test]
+fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
+    let mesh = noisy_sphere(3, 0.05); // 642 vertices
+    let keep: Vec<u32> = (0..642).filter(|v| v % 7 == 3).collect();
+    let out = decimate_keeping(
+        &mesh,
+        &DecimationOptions {
+            target: Target::Faces(1),
+            keep_original_positions: true,
+            ..Default::default()
+        },
+        &keep,
+    )
+    .unwrap();
+    let mut outputs: Vec<u32> = keep.iter().map(|&v| out.vertex_map[v as usize]).collect();
+    for (&v, &o) in keep.iter().zip(&outputs) {
+        assert_eq!(out.mesh.vertices()[o as usize], mesh.vertices()[v as usize]);
+    }
+    outputs.sort_unstable();
+    outputs.dedup();
+    assert_eq!(outputs.len(), keep.len(), "two kept vertices merged");
+    // Nearly every other vertex goes (a few are held by the manifold and flip checks).
+    let others = out.mesh.vertex_count() - keep.len();
+    assert!(
+        others * 20 < keep.len(),
+        "{others} others left of {}",
+        642 - keep.len()
+    );
+    assert_eq!(out.stop_reason, StopReason::NoValidCollapse);
+    assert_closed_manifold(&out.mesh);
+    // Without the kept list the same target goes further, through the kept vertices.
+    let free = decimate(
+        &mesh,
+        &DecimationOptions {
+            target: Target::Faces(1),
+            keep_original_positions: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(free.mesh.vertex_count() < keep.len());
+    assert!(decimate_keeping(&mesh, &options(Target::Ratio(0.5)), &[642]).is_err());
 }
 
 #[test]

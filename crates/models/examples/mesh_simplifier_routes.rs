@@ -20,8 +20,8 @@ use candle_nn::{VarBuilder, VarMap};
 use meshgnn_data::{ShapeFamily, shape_mesh};
 use meshgnn_geometry::{TriMesh, boundary_loops, sample_surface, voronoi_dual_triangles};
 use meshgnn_graph::{
-    DecimationOptions, FpsStart, Target, balanced_sampling, decimate, fast_farthest_point_sampling,
-    qem_vertices, weighted_sampling,
+    DecimationOptions, FpsStart, Target, balanced_sampling, decimate, decimate_keeping,
+    fast_farthest_point_sampling, qem_vertices, weighted_sampling,
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
 use meshgnn_models::mesh_simplifier::{
@@ -126,48 +126,62 @@ fn evaluate(args: &[String]) -> AnyResult<()> {
     Ok(())
 }
 
-/// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, the Voronoi dual of the trained
-/// sampler's picks (what the face classifier learnt to reproduce) and of QEM's own vertex
-/// selection, each as a Chamfer distance over QEM's at the dual's face count: the best the
-/// model can reach by matching its targets.
-fn dual_ceiling(args: &[String]) -> AnyResult<()> {
+/// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, what the face classifier could reach
+/// by reproducing a target among the trained sampler's picks: their Voronoi dual (the target
+/// it learnt), the QEM connectivity of the picks (every other vertex collapsed onto them,
+/// [`decimate_keeping`]), and for reference the dual of QEM's own vertex selection. Each as
+/// faces, WA and Chamfer distance over QEM's at the same face count.
+fn target_ceiling(args: &[String]) -> AnyResult<()> {
     let [weights, ratio, files @ ..] = args else {
         return Err("give the weights file, the vertex ratio and mesh files".into());
     };
     let model = NeuralMeshSimplifier::load(weights)?;
     let ratio: f64 = ratio.parse()?;
-    println!("file\tfaces\tpicks\tdual_faces\tdual_WA\tsampler_dual/qem\tqem_picks_dual/qem");
+    println!("file\tfaces\tpicks\tdual: faces WA CD/qem\tpicks' QEM\tdual of QEM's picks");
     for file in files {
         let mesh = meshgnn_geometry::read_mesh(file)?;
         let m = ((mesh.vertex_count() as f64) * ratio).round() as usize;
         let input = MeshInput::new(&mesh, model.device())?;
-        let dual = dual_mesh(&mesh, &model.forward(&input, m, 0)?.sampled.indices)?;
-        let qem = decimate(
+        let picks = model.forward(&input, m, 0)?.sampled.indices;
+        // Faces, WA and CD over QEM's at the same face count; no distance without faces.
+        let judged = |target: &TriMesh| -> AnyResult<String> {
+            let faces = target.face_count();
+            if faces == 0 {
+                return Ok("0 - -".into());
+            }
+            let qem = decimate(
+                &mesh,
+                &DecimationOptions {
+                    target: Target::Faces(faces),
+                    ..Default::default()
+                },
+            )?;
+            Ok(format!(
+                "{faces} {:.1} {:.2}",
+                watertightness(target),
+                surface_chamfer(&mesh, target)? / surface_chamfer(&mesh, &qem.mesh)?
+            ))
+        };
+        let collapsed = decimate_keeping(
             &mesh,
             &DecimationOptions {
-                target: Target::Faces(dual.face_count()),
+                target: Target::Faces(1),
+                keep_original_positions: true,
                 ..Default::default()
             },
+            &picks,
         )?;
-        let cd_qem = surface_chamfer(&mesh, &qem.mesh)?;
-        // A dual without faces has no distance; QEM's selection stops short on some meshes
-        // (non-manifold regions): no figure then.
-        let over_qem = |dual: &TriMesh| -> AnyResult<String> {
-            Ok(match dual.face_count() {
-                0 => "-".into(),
-                _ => format!("{:.2}", surface_chamfer(&mesh, dual)? / cd_qem),
-            })
-        };
+        // QEM's selection stops short on some meshes (non-manifold regions): no figure then.
         let qem_picks_dual = match qem_vertices(&mesh, m) {
-            Ok(selection) => over_qem(&dual_mesh(&mesh, &selection.indices)?)?,
+            Ok(selection) => judged(&dual_mesh(&mesh, &selection.indices)?)?,
             Err(_) => "-".into(),
         };
         println!(
-            "{file}\t{}\t{m}\t{}\t{:.1}\t{}\t{qem_picks_dual}",
+            "{file}\t{}\t{m}\t{}\t{} ({} vertices)\t{qem_picks_dual}",
             mesh.face_count(),
-            dual.face_count(),
-            watertightness(&dual),
-            over_qem(&dual)?
+            judged(&dual_mesh(&mesh, &picks)?)?,
+            judged(&collapsed.mesh)?,
+            collapsed.mesh.vertex_count()
         );
     }
     Ok(())
@@ -230,7 +244,7 @@ fn main() -> AnyResult<()> {
     match args.get(1).map(String::as_str) {
         Some("train") => return train_model(&args[2..]),
         Some("eval") => return evaluate(&args[2..]),
-        Some("ceiling") => return dual_ceiling(&args[2..]),
+        Some("ceiling") => return target_ceiling(&args[2..]),
         _ => {}
     }
     let resolution: usize = args.get(1).map_or(Ok(40), |s| s.parse())?;

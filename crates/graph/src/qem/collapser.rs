@@ -32,8 +32,11 @@ const REMOVED: u32 = 4;
 /// removed only along a non-manifold edge, by the checks of `collapse_checks.rs` that keep
 /// every edge's face count from growing.
 pub(crate) const NON_MANIFOLD: u32 = 8;
+/// Vertex flag: kept by the caller ([`super::decimate_keeping`]): never removed, never moved;
+/// other vertices may collapse onto it.
+const KEPT: u32 = 16;
 /// The flags' bits of [`VertexRecord::meta`]; the incidence list length is stored above them.
-const FLAG_BITS: u32 = 4;
+const FLAG_BITS: u32 = 5;
 /// The largest supported face count: incidence offsets are `u32` (`refs` stays below
 /// `4 · #F + 1024` plus one fan) and a vertex's face count fits in `32 − FLAG_BITS` bits.
 const MAX_FACES: usize = 250_000_000;
@@ -52,7 +55,7 @@ pub(crate) struct VertexRecord {
     /// Start of this vertex's incident faces in [`Collapser::refs`].
     pub start: u32,
     /// `len << FLAG_BITS | flags`: the number of incident faces (which may include dead
-    /// ones) and [`LOCKED`] | [`BOUNDARY`] | `REMOVED`.
+    /// ones) and [`LOCKED`] | [`BOUNDARY`] | `REMOVED` | [`NON_MANIFOLD`] | `KEPT`.
     pub meta: u32,
 }
 
@@ -71,6 +74,10 @@ impl VertexRecord {
 
     pub(crate) fn non_manifold(&self) -> bool {
         self.meta & NON_MANIFOLD != 0
+    }
+
+    pub(crate) fn kept(&self) -> bool {
+        self.meta & KEPT != 0
     }
 
     /// The range of `refs` holding the incident faces.
@@ -149,8 +156,18 @@ pub(crate) struct Collapser {
 
 impl Collapser {
     /// Welds `mesh`, builds the incidence lists, quadrics (area-weighted face planes plus
-    /// boundary planes), region normals, flags and the list of collapsible edges.
-    pub(crate) fn new(mesh: &TriMesh, options: &DecimationOptions) -> Result<Self> {
+    /// boundary planes), region normals, flags (the input vertices `keep` kept) and the list
+    /// of collapsible edges.
+    pub(crate) fn new(mesh: &TriMesh, options: &DecimationOptions, keep: &[u32]) -> Result<Self> {
+        if let Some(&v) = keep.iter().find(|&&v| v as usize >= mesh.vertex_count()) {
+            return Err(Error::InvalidParameter {
+                name: "keep",
+                message: format!(
+                    "vertex {v} to keep is outside the mesh's {} vertices",
+                    mesh.vertex_count()
+                ),
+            });
+        }
         if mesh.face_count() > MAX_FACES || mesh.vertex_count() >= DEAD as usize {
             return Err(Error::UnusableMesh {
                 what: "mesh to decimate".into(),
@@ -352,6 +369,13 @@ impl Collapser {
         }
         for (v, flag) in flags {
             verts[v as usize].meta |= flag;
+        }
+        // A kept position keeps all its twins (they collapse together).
+        for &v in keep {
+            let w = welding.map[v as usize];
+            for t in std::iter::once(w).chain(twins_of(&welding.twin, w)) {
+                verts[t as usize].meta |= KEPT;
+            }
         }
         let edges = chunks.into_iter().map(|(edges, _)| edges).collect();
 

@@ -11,8 +11,10 @@ impl Collapser {
     /// face), or both are pinned (locked or on a non-manifold edge) and `(a, b)` is not itself
     /// a non-manifold edge.
     ///
-    /// Boundaries stay on the input's boundary polyline: an interior → boundary edge collapses
-    /// onto the boundary vertex and a boundary edge to the best point of its segment.
+    /// A kept vertex stays where it is: an edge to one collapses onto it, and an edge between
+    /// two is never collapsed. Boundaries stay on the input's boundary polyline: an interior →
+    /// boundary edge collapses onto the boundary vertex and a boundary edge to the best point
+    /// of its segment.
     /// Non-manifold edges keep their vertices: an edge to a pinned vertex collapses onto it,
     /// and one along a non-manifold edge or a seam onto one of its ends. Every
     /// candidate position is rounded to `f32` (the output precision) before it is scored, so
@@ -20,6 +22,10 @@ impl Collapser {
     pub(crate) fn placement(&self, a: u32, b: u32) -> Option<Placement> {
         let (ia, ib) = (a as usize, b as usize);
         let (va, vb) = (self.verts[ia], self.verts[ib]);
+        let (ka, kb) = (va.kept(), vb.kept());
+        if ka && kb {
+            return None;
+        }
         let (la, lb) = (va.locked(), vb.locked());
         let (pin_a, pin_b) = (la || va.non_manifold(), lb || vb.non_manifold());
         if la && lb {
@@ -51,9 +57,9 @@ impl Collapser {
         };
         let (ba, bb) = (va.boundary(), vb.boundary());
         let at = |t: f64| std::array::from_fn(|i| pa[i] + t * (pb[i] - pa[i]));
-        if (la && !lb) || (pin_a && !pin_b) || (ba && !bb && !pin_b) {
+        if ka || (la && !lb) || (pin_a && !pin_b) || (ba && !bb && !pin_b) {
             consider(pa, a, 0.0);
-        } else if (lb && !la) || (pin_b && !pin_a) || (bb && !ba && !pin_a) {
+        } else if kb || (lb && !la) || (pin_b && !pin_a) || (bb && !ba && !pin_a) {
             consider(pb, b, 1.0);
         } else if self.keep_original_positions || (pin_a && pin_b) {
             consider(pa, a, 0.0);

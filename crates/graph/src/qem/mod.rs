@@ -21,7 +21,8 @@ mod vertex_selection;
 mod weld_by_position;
 
 pub use decimation::{
-    Decimation, DecimationOptions, StopReason, Target, decimate, decimate_with_progress,
+    Decimation, DecimationOptions, StopReason, Target, decimate, decimate_keeping,
+    decimate_with_progress,
 };
 pub use quadric::Quadric;
 pub use region_placement::region_quadric_placement;
