@@ -468,16 +468,13 @@ fn keep_original_positions_places_vertices_on_inputs() {
 fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
     let mesh = noisy_sphere(3, 0.05); // 642 vertices
     let keep: Vec<u32> = (0..642).filter(|v| v % 7 == 3).collect();
-    let out = decimate_keeping(
-        &mesh,
-        &DecimationOptions {
-            target: Target::Faces(1),
-            keep_original_positions: true,
-            ..Default::default()
-        },
-        &keep,
-    )
-    .unwrap();
+    // As far as possible, every vertex at an input position.
+    let collapse_all = DecimationOptions {
+        target: Target::Faces(1),
+        keep_original_positions: true,
+        ..Default::default()
+    };
+    let out = decimate_keeping(&mesh, &collapse_all, &keep).unwrap();
     let mut outputs: Vec<u32> = keep.iter().map(|&v| out.vertex_map[v as usize]).collect();
     for (&v, &o) in keep.iter().zip(&outputs) {
         assert_eq!(out.mesh.vertices()[o as usize], mesh.vertices()[v as usize]);
@@ -495,15 +492,7 @@ fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
     assert_eq!(out.stop_reason, StopReason::NoValidCollapse);
     assert_closed_manifold(&out.mesh);
     // Without the kept list the same target goes further, through the kept vertices.
-    let free = decimate(
-        &mesh,
-        &DecimationOptions {
-            target: Target::Faces(1),
-            keep_original_positions: true,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let free = decimate(&mesh, &collapse_all).unwrap();
     assert!(free.mesh.vertex_count() < keep.len());
     assert!(decimate_keeping(&mesh, &options(Target::Ratio(0.5)), &[642]).is_err());
 }
