@@ -1,7 +1,7 @@
 """Type stubs of the extension module; meshgnn/__init__.py re-exports these functions."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -34,15 +34,19 @@ def simplify(
     faces: Optional[int] = None,
     method: str = "qem",
     max_error: Optional[float] = None,
+    keep: Optional[Union[_Indices, Sequence[int]]] = None,
     seed: int = 0,
     weights: Optional[_Path] = None,
     fill_holes: Optional[int] = None,
+    keep_positions: bool = False,
     return_vertex_map: bool = False,
     return_info: bool = False,
 ) -> Tuple[Any, ...]:
-    """QEM edge collapse (method "qem") or the neural mesh simplifier of thesis ch. 6 (method
-    "neural", bundled weights or `weights`, seeded, holes of at most `fill_holes` edges closed)
-    to `ratio` of the faces or to `faces` faces (exactly one). Returns (V', F'), then
+    """QEM edge collapse (method "qem"; `keep`: input vertices never removed nor moved, e.g.
+    landmarks) or the neural mesh simplifier of thesis ch. 6 (method "neural", bundled weights
+    or `weights`, seeded, holes of at most `fill_holes` edges closed, `keep_positions` leaving
+    the selected vertices unplaced) to `ratio` of the faces or to `faces` faces (exactly one).
+    Returns (V', F'), then
     vertex_map (vertex_map[i]: the output vertex input vertex i was merged into, or kept as;
     -1 for a vertex the neural method dropped) with return_vertex_map, then a dict
     (input_faces, output_faces, error, stop_reason, and collapses for QEM or wa_raw, wa, holes

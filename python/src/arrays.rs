@@ -123,6 +123,33 @@ pub fn triangles(array: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<[u32; 3]>
         .collect()
 }
 
+/// Reads `array` (argument `name`) as vertex indices: an int32/int64 vector or a sequence of
+/// ints. A negative or larger-than-u32 entry is an error naming it; the range against the
+/// vertex count is checked by the operator.
+pub fn index_vector(array: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<u32>> {
+    let values: Vec<i64> = if let Ok(a) = array.extract::<PyReadonlyArray1<'_, i64>>() {
+        a.as_array().to_vec()
+    } else if let Ok(a) = array.extract::<PyReadonlyArray1<'_, i32>>() {
+        a.as_array().iter().map(|&x| i64::from(x)).collect()
+    } else if let Ok(list) = array.extract::<Vec<i64>>() {
+        list
+    } else {
+        return Err(PyValueError::new_err(format!(
+            "{name}: expected an int32 or int64 array of shape (k,) or a sequence of ints, got {}",
+            describe(array)
+        )));
+    };
+    values
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            u32::try_from(v).map_err(|_| {
+                PyValueError::new_err(format!("{name}: entry {i} is {v}, not a vertex index"))
+            })
+        })
+        .collect()
+}
+
 /// Reads `array` (argument `name`) as a float32/float64 vector.
 pub fn float_vector(array: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f32>> {
     if let Ok(a) = array.extract::<PyReadonlyArray1<'_, f32>>() {

@@ -1,33 +1,34 @@
-//! `simplify`: QEM edge collapse (`meshgnn_graph::decimate`, the engine of `meshsimplify
+//! `simplify`: QEM edge collapse (`meshgnn_graph::decimate_keeping`, the engine of `meshsimplify
 //! simplify`) or the neural mesh simplifier of thesis ch. 6 (`NeuralMeshSimplifier`, bundled
 //! weights) on numpy arrays.
 
 use std::path::PathBuf;
 
-use meshgnn_graph::{DecimationOptions, Target, decimate};
+use meshgnn_graph::{DecimationOptions, Target, decimate_keeping};
 use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::arrays::index_vector_out;
+use crate::arrays::{index_vector, index_vector_out};
 use crate::errors::value_error;
 use crate::mesh_io::{mesh_out, surface_mesh_in};
 
-/// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None, seed=0,
+/// `simplify(V, F, *, ratio=None, faces=None, method="qem", max_error=None, keep=None, seed=0,
 /// weights=None, fill_holes=None, keep_positions=False, return_vertex_map=False,
 /// return_info=False) -> (V', F'[,
 /// vertex_map][, info])`: exactly one of `ratio` (of the faces, in (0, 1]) and `faces` (a count
 /// in 1..=m). `vertex_map[i]` is the output vertex input vertex `i` was merged into (QEM) or
 /// kept as (neural; -1 for a vertex not kept); `info` holds the keys of `meshsimplify simplify
 /// --json` (`input_faces`, `output_faces`, `error`, `stop_reason`, and `collapses` for QEM,
-/// `wa_raw`, `wa`, `holes` for neural). `max_error` is QEM's; `seed`, `weights` (a checkpoint
+/// `wa_raw`, `wa`, `holes` for neural). `max_error` and `keep` (input vertices never removed
+/// nor moved, e.g. landmarks: the CLI's `--keep`) are QEM's; `seed`, `weights` (a checkpoint
 /// instead of the bundled weights), `fill_holes` (close holes of at most that many edges) and
 /// `keep_positions` (leave the selected vertices where the network picked them instead of at
 /// their regions' quadric optima) the neural method's.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, seed=0, weights=None, fill_holes=None, keep_positions=false, return_vertex_map=false, return_info=false))]
+#[pyo3(signature = (v, f, /, *, ratio=None, faces=None, method="qem", max_error=None, keep=None, seed=0, weights=None, fill_holes=None, keep_positions=false, return_vertex_map=false, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn simplify<'py>(
     py: Python<'py>,
@@ -37,6 +38,7 @@ pub fn simplify<'py>(
     faces: Option<usize>,
     method: &str,
     max_error: Option<f64>,
+    keep: Option<&Bound<'py, PyAny>>,
     seed: u64,
     weights: Option<PathBuf>,
     fill_holes: Option<usize>,
@@ -65,6 +67,7 @@ pub fn simplify<'py>(
     };
     if neural {
         refuse(max_error.is_some(), "max_error")?;
+        refuse(keep.is_some(), "keep")?;
     } else {
         refuse(seed != 0, "seed")?;
         refuse(weights.is_some(), "weights")?;
@@ -125,8 +128,10 @@ pub fn simplify<'py>(
             max_error,
             ..Default::default()
         };
+        let keep = keep.map(|k| index_vector(k, "keep")).transpose()?;
+        let keep = keep.as_deref().unwrap_or_default();
         let result = py
-            .detach(|| decimate(&mesh, &options))
+            .detach(|| decimate_keeping(&mesh, &options, keep, &mut |_| {}))
             .map_err(|e| value_error("simplify", e))?;
         info.set_item("output_faces", result.mesh.face_count())?;
         info.set_item("error", result.error_distance)?;

@@ -55,6 +55,27 @@ def test_simplify_matches_the_command_line_tool(tmp_path, creature_path, cli):
     assert len(F2) <= 4461
 
 
+def test_simplify_keeps_landmarks_like_the_command_line_tool(tmp_path, creature_path, cli):
+    V, F = meshgnn.read_mesh(creature_path)
+    keep = np.arange(0, len(V), 997)
+    V2, F2, vertex_map = meshgnn.simplify(V, F, faces=4460, keep=keep, return_vertex_map=True)
+    np.testing.assert_array_equal(V2[vertex_map[keep]], V[keep])
+    assert len(np.unique(vertex_map[keep])) == len(keep)
+    landmarks = tmp_path / "landmarks.txt"
+    landmarks.write_text(", ".join(map(str, keep)))
+    out = tmp_path / "cli.ply"
+    subprocess.run(
+        [cli("meshsimplify"), "simplify", creature_path, "-o", out, "--faces", "4460",
+         "--keep", landmarks],
+        check=True, capture_output=True,
+    )
+    V_cli, F_cli = meshgnn.read_mesh(out)
+    np.testing.assert_array_equal(F2, F_cli)
+    np.testing.assert_array_equal(V2, V_cli)
+    V3, F3 = meshgnn.simplify(V, F, faces=4460, keep=keep.tolist())
+    np.testing.assert_array_equal(F3, F2)
+
+
 def test_neural_simplify_matches_the_command_line_tool(tmp_path, creature_path, cli):
     V, F = meshgnn.read_mesh(creature_path)
     V2, F2, vertex_map, info = meshgnn.simplify(
@@ -150,6 +171,10 @@ def test_simplify_rejects_bad_arrays_with_one_line(icosphere_path, change, messa
         ({"ratio": 0.5, "fill_holes": 30}, 'fill_holes= applies to method="neural" only'),
         ({"ratio": 0.5, "keep_positions": True}, 'keep_positions= applies to method="neural" only'),
         ({"ratio": 0.5, "method": "neural", "max_error": 1.0}, 'applies to method="qem" only'),
+        ({"ratio": 0.5, "method": "neural", "keep": [1]}, 'keep= applies to method="qem" only'),
+        ({"ratio": 0.5, "keep": [3, -1]}, "keep: entry 1 is -1"),
+        ({"ratio": 0.5, "keep": [1000]}, "vertex 1000 to keep"),
+        ({"ratio": 0.5, "keep": "abc"}, "keep: expected"),
         ({"ratio": 0.5, "method": "neural", "fill_holes": 5000}, "fill_holes=5000"),
         ({"ratio": 0.5, "method": "neural", "weights": "missing.safetensors"}, "missing.safetensors"),
     ],

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation, vertex_normals};
-use meshgnn_graph::{DecimationOptions, Target, decimate_with_progress};
+use meshgnn_graph::{DecimationOptions, Target, decimate_keeping};
 use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
 use meshgnn_models::point_selection::{SelectionInput, SelectionMethod, SelectionModel, select};
 use serde_json::{Value, json};
@@ -45,6 +45,8 @@ impl Method {
 pub struct MethodOptions<'a> {
     /// QEM stops before any collapse above this error (input units).
     pub max_error: Option<f64>,
+    /// QEM never removes nor moves these input vertices.
+    pub keep: Vec<u32>,
     /// Neural: close the holes of at most this many edges.
     pub fill_holes: Option<usize>,
     /// Neural: leave the selected vertices at their input positions (no quadric placement).
@@ -57,7 +59,10 @@ pub struct MethodOptions<'a> {
 
 /// A method with everything it needs besides the mesh.
 pub enum Simplifier {
-    Qem(DecimationOptions),
+    Qem {
+        options: DecimationOptions,
+        keep: Vec<u32>,
+    },
     Neural {
         model: Box<NeuralMeshSimplifier>,
         target: Target,
@@ -84,6 +89,7 @@ impl Simplifier {
         };
         if method != Method::Qem {
             only(options.max_error.is_some(), "--max-error", "qem")?;
+            only(!options.keep.is_empty(), "--keep", "qem")?;
         }
         if method != Method::Neural {
             only(options.fill_holes.is_some(), "--fill-holes", "neural")?;
@@ -96,11 +102,14 @@ impl Simplifier {
                     "--weights",
                     "neural or pc+remesh",
                 )?;
-                Ok(Self::Qem(DecimationOptions {
-                    target,
-                    max_error: options.max_error,
-                    ..Default::default()
-                }))
+                Ok(Self::Qem {
+                    options: DecimationOptions {
+                        target,
+                        max_error: options.max_error,
+                        ..Default::default()
+                    },
+                    keep: options.keep.clone(),
+                })
             }
             Method::Neural => {
                 if let Some(k) = options.fill_holes
@@ -156,7 +165,7 @@ impl Simplifier {
     /// The size this method aims at.
     pub fn target(&self) -> &Target {
         match self {
-            Self::Qem(options) => &options.target,
+            Self::Qem { options, .. } => &options.target,
             Self::Neural { target, .. } | Self::PcRemesh { target, .. } => target,
         }
     }
@@ -180,8 +189,8 @@ impl Simplifier {
             (simplified, outcome)
         };
         match self {
-            Self::Qem(options) => {
-                let result = decimate_with_progress(mesh, options, progress)?;
+            Self::Qem { options, keep } => {
+                let result = decimate_keeping(mesh, options, keep, progress)?;
                 let outcome = Outcome {
                     input_faces: result.input_faces,
                     input_vertices: result.input_vertices,

@@ -1,5 +1,5 @@
 //! `meshsimplify simplify IN -o OUT (--ratio R | --faces N) [--method qem|neural|pc+remesh]
-//! [--max-error E] [--weights FILE] [--fill-holes [K]] [--keep-positions] [--seed S]
+//! [--max-error E] [--keep FILE] [--weights FILE] [--fill-holes [K]] [--keep-positions] [--seed S]
 //! [--preview PNG [--wireframe]] [--force] [--json]`: simplify a mesh file to a target size,
 //! or every mesh file of a folder IN into the folder OUT (same names; files in parallel; a
 //! failed file never stops the others, and the exit code says whether any failed).
@@ -17,6 +17,8 @@
 //! method's manifold pass. The neural method moves each selected vertex to the quadric optimum
 //! of the input region it stands for (`meshgnn_graph::region_quadric_placement`);
 //! `--keep-positions` leaves them where the network picked them (the thesis' output).
+//! `--keep FILE` (qem) never removes nor moves the input vertices the file lists (landmarks,
+//! by their 0-based index in IN); the others may collapse onto them.
 //!
 //! `--preview PNG` (one file only) renders the input and the result side by side, shaded, with
 //! the project's own rasteriser (`meshgnn_data::contact_sheet`), `--wireframe` drawing edges.
@@ -65,6 +67,10 @@ pub struct SimplifyArgs {
     /// Stop before any collapse whose error exceeds this distance (input units; qem only).
     #[arg(long)]
     pub max_error: Option<f64>,
+    /// Never remove nor move these input vertices (landmarks): a text file of 0-based vertex
+    /// indices separated by spaces, commas or line breaks (qem only, one file only).
+    #[arg(long, value_name = "FILE")]
+    pub keep: Option<PathBuf>,
     /// Weights of the neural or point-cloud simplifier (a file its training wrote); the
     /// bundled ones when omitted (neural and pc+remesh only).
     #[arg(long)]
@@ -106,8 +112,17 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     {
         bail!("--max-error {e} must be a finite distance >= 0");
     }
+    let keep = match &args.keep {
+        Some(_) if args.input.is_dir() => bail!(
+            "--keep names vertices of one mesh; {} is a folder",
+            args.input.display()
+        ),
+        Some(path) => read_vertex_list(path)?,
+        None => Vec::new(),
+    };
     let options = MethodOptions {
         max_error: args.max_error,
+        keep,
         fill_holes: args.fill_holes,
         keep_positions: args.keep_positions,
         weights: args.weights.as_deref(),
@@ -126,8 +141,8 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     MeshFormat::from_path(&args.output)
         .with_context(|| format!("output {}", args.output.display()))?;
     let guarded = if args.force { None } else { Some(&args.input) };
-    let guard =
-        OutputGuard::new(guarded.into_iter().chain(&args.weights)).overridable_by("--force");
+    let guard = OutputGuard::new(guarded.into_iter().chain(&args.weights).chain(&args.keep))
+        .overridable_by("--force");
     guard.check(&args.output)?;
     let preview = match &args.preview {
         Some(path) if path == &args.output => {
@@ -135,7 +150,12 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         }
         Some(path) => {
             // The preview never replaces an input, --force or not.
-            OutputGuard::new(std::iter::once(&args.input).chain(&args.weights)).check(path)?;
+            OutputGuard::new(
+                std::iter::once(&args.input)
+                    .chain(&args.weights)
+                    .chain(&args.keep),
+            )
+            .check(path)?;
             Some(Preview {
                 path,
                 wireframe: args.wireframe,
@@ -166,6 +186,24 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         outcome.print(&args.input, &args.output);
     }
     Ok(())
+}
+
+/// The vertex indices of the text file `path`: non-negative integers separated by spaces,
+/// commas or line breaks.
+fn read_vertex_list(path: &Path) -> Result<Vec<u32>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading the --keep file {}", path.display()))?;
+    text.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|token| !token.is_empty())
+        .map(|token| {
+            token.parse::<u32>().with_context(|| {
+                format!(
+                    "the --keep file {}: {token:?} is not a vertex index",
+                    path.display()
+                )
+            })
+        })
+        .collect()
 }
 
 /// Where the side-by-side PNG goes and whether it shows edges.

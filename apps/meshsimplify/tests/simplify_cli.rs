@@ -14,6 +14,11 @@ fn meshsimplify(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// `meshsimplify simplify INPUT -o OUTPUT` followed by `args`.
+fn simplify(input: &str, output: &str, args: &[&str]) -> Output {
+    meshsimplify(&[&["simplify", input, "-o", output], args].concat())
+}
+
 fn sphere_file(dir: &Path) -> String {
     let path = dir.join("sphere.ply");
     write_mesh(&path, &icosphere(4)).unwrap();
@@ -150,6 +155,61 @@ fn bad_arguments_write_nothing() {
 }
 
 #[test]
+fn kept_vertices_stay_where_they_are_and_bad_lists_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sphere_file(dir.path());
+    let sphere = read_mesh(&input).unwrap();
+    let keep: Vec<usize> = (0..sphere.vertex_count()).step_by(50).collect();
+    let list = dir.path().join("landmarks.txt");
+    let text: Vec<String> = keep.iter().map(usize::to_string).collect();
+    std::fs::write(
+        &list,
+        format!("{}\n{}\n", text[..3].join(", "), text[3..].join(" ")),
+    )
+    .unwrap();
+    let output = dir.path().join("small.ply");
+    let (out_path, list_path) = (output.to_str().unwrap(), list.to_str().unwrap());
+    let run = |extra: &[&str]| simplify(&input, out_path, &[&["--faces", "60"], extra].concat());
+    let out = run(&["--keep", list_path]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let simplified = read_mesh(&output).unwrap();
+    for &v in &keep {
+        let p = sphere.vertices()[v];
+        assert!(
+            simplified.vertices().contains(&p),
+            "vertex {v} moved or went"
+        );
+    }
+    // Without the list the decimation does not keep them all.
+    assert!(run(&[]).status.success());
+    let free = read_mesh(&output).unwrap();
+    let kept = |mesh: &meshgnn_geometry::TriMesh| {
+        keep.iter()
+            .filter(|&&v| mesh.vertices().contains(&sphere.vertices()[v]))
+            .count()
+    };
+    assert!(kept(&free) < keep.len());
+    std::fs::remove_file(&output).unwrap();
+    let bad = dir.path().join("bad.txt");
+    for (content, message) in [("3 x 7", "\"x\" is not a vertex index"), ("99999", "99999")] {
+        std::fs::write(&bad, content).unwrap();
+        let out = run(&["--keep", bad.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(message),
+            "{stderr}"
+        );
+        assert!(!output.exists());
+    }
+    let out = run(&["--keep", list_path, "--method", "neural"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--keep applies to --method qem"));
+}
+
+#[test]
 fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_watertightness() {
     let dir = tempfile::tempdir().unwrap();
     let input = sphere_file(dir.path());
@@ -237,11 +297,7 @@ fn the_preview_shows_input_and_result_side_by_side() {
     let output = dir.path().join("small.ply");
     let png = dir.path().join("preview.png");
     let (out_path, png_path) = (output.to_str().unwrap(), png.to_str().unwrap());
-    let run = |extra: &[&str]| {
-        let mut args = vec!["simplify", &input, "-o", out_path, "--ratio", "0.1"];
-        args.extend(extra);
-        meshsimplify(&args)
-    };
+    let run = |extra: &[&str]| simplify(&input, out_path, &[&["--ratio", "0.1"], extra].concat());
     let out = run(&["--preview", png_path, "--wireframe"]);
     assert!(
         out.status.success(),

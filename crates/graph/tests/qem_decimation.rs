@@ -474,7 +474,7 @@ fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
         keep_original_positions: true,
         ..Default::default()
     };
-    let out = decimate_keeping(&mesh, &collapse_all, &keep).unwrap();
+    let out = decimate_keeping(&mesh, &collapse_all, &keep, &mut |_| {}).unwrap();
     let mut outputs: Vec<u32> = keep.iter().map(|&v| out.vertex_map[v as usize]).collect();
     for (&v, &o) in keep.iter().zip(&outputs) {
         assert_eq!(out.mesh.vertices()[o as usize], mesh.vertices()[v as usize]);
@@ -494,7 +494,7 @@ fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
     // Without the kept list the same target goes further, through the kept vertices.
     let free = decimate(&mesh, &collapse_all).unwrap();
     assert!(free.mesh.vertex_count() < keep.len());
-    assert!(decimate_keeping(&mesh, &options(Target::Ratio(0.5)), &[642]).is_err());
+    assert!(decimate_keeping(&mesh, &options(Target::Ratio(0.5)), &[642], &mut |_| {}).is_err());
 }
 
 #[test]

@@ -170,6 +170,7 @@ fn target_ceiling(args: &[String]) -> AnyResult<()> {
                 ..Default::default()
             },
             &picks,
+            &mut |_| {},
         )?;
         // QEM's selection stops short on some meshes (non-manifold regions): no figure then.
         let qem_picks_dual = match qem_vertices(&mesh, m) {

@@ -215,14 +215,14 @@ pub fn decimate_with_progress(
     options: &DecimationOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Decimation> {
-    decimate_keeping_with_progress(mesh, options, &[], progress)
+    decimate_keeping(mesh, options, &[], progress)
 }
 
-/// [`decimate`] that never removes nor moves the input vertices `keep` (landmarks, or vertices
-/// chosen beforehand): every other vertex may collapse onto them, and no edge between two of
-/// them collapses. With `keep_original_positions` and a target of one face it removes every
-/// other vertex it can: the QEM connectivity of the kept vertices. Errors as [`decimate`] and
-/// on a vertex outside the mesh.
+/// [`decimate_with_progress`] that never removes nor moves the input vertices `keep`
+/// (landmarks, or vertices chosen beforehand): every other vertex may collapse onto them, and
+/// no edge between two of them collapses. With `keep_original_positions` and a target of one
+/// face it removes every other vertex it can: the QEM connectivity of the kept vertices.
+/// Errors as [`decimate`] and on a vertex outside the mesh.
 ///
 /// ```
 /// use meshgnn_geometry::icosphere;
@@ -230,7 +230,7 @@ pub fn decimate_with_progress(
 /// let sphere = icosphere(2); // 162 vertices
 /// let keep: Vec<u32> = (0..162).step_by(4).collect();
 /// let options = DecimationOptions { target: Target::Faces(1), ..Default::default() };
-/// let out = decimate_keeping(&sphere, &options, &keep)?;
+/// let out = decimate_keeping(&sphere, &options, &keep, &mut |_| {})?;
 /// for &v in &keep {
 ///     let o = out.vertex_map[v as usize] as usize;
 ///     assert_eq!(out.mesh.vertices()[o], sphere.vertices()[v as usize]);
@@ -238,14 +238,6 @@ pub fn decimate_with_progress(
 /// # Ok::<(), meshgnn_graph::Error>(())
 /// ```
 pub fn decimate_keeping(
-    mesh: &TriMesh,
-    options: &DecimationOptions,
-    keep: &[u32],
-) -> Result<Decimation> {
-    decimate_keeping_with_progress(mesh, options, keep, &mut |_| {})
-}
-
-fn decimate_keeping_with_progress(
     mesh: &TriMesh,
     options: &DecimationOptions,
     keep: &[u32],
