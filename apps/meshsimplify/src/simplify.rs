@@ -38,7 +38,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshgnn_data::{View, contact_sheet, write_png};
 use meshgnn_geometry::{
-    InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, write_mesh,
+    InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, read_vertex_list, write_mesh,
 };
 use meshgnn_graph::Target;
 use rayon::prelude::*;
@@ -68,7 +68,7 @@ pub struct SimplifyArgs {
     #[arg(long)]
     pub max_error: Option<f64>,
     /// Never remove nor move these input vertices (landmarks): a text file of 0-based vertex
-    /// indices separated by spaces, commas or line breaks (qem only, one file only).
+    /// indices separated by spaces, commas or line breaks, `#` comments (qem only, one file).
     #[arg(long, value_name = "FILE")]
     pub keep: Option<PathBuf>,
     /// Weights of the neural or point-cloud simplifier (a file its training wrote); the
@@ -117,7 +117,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
             "--keep names vertices of one mesh; {} is a folder",
             args.input.display()
         ),
-        Some(path) => read_vertex_list(path)?,
+        Some(path) => read_vertex_list(path).context("reading the --keep list")?,
         None => Vec::new(),
     };
     let options = MethodOptions {
@@ -186,24 +186,6 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         outcome.print(&args.input, &args.output);
     }
     Ok(())
-}
-
-/// The vertex indices of the text file `path`: non-negative integers separated by spaces,
-/// commas or line breaks.
-fn read_vertex_list(path: &Path) -> Result<Vec<u32>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading the --keep file {}", path.display()))?;
-    text.split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|token| !token.is_empty())
-        .map(|token| {
-            token.parse::<u32>().with_context(|| {
-                format!(
-                    "the --keep file {}: {token:?} is not a vertex index",
-                    path.display()
-                )
-            })
-        })
-        .collect()
 }
 
 /// Where the side-by-side PNG goes and whether it shows edges.

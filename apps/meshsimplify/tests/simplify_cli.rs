@@ -195,7 +195,7 @@ fn kept_vertices_stay_where_they_are_and_bad_lists_are_refused() {
     assert!(kept(&free) < keep.len());
     std::fs::remove_file(&output).unwrap();
     let bad = dir.path().join("bad.txt");
-    for (content, message) in [("3 x 7", "\"x\" is not a vertex index"), ("99999", "99999")] {
+    for (content, message) in [("3 x 7", "`x` is not a vertex index"), ("99999", "99999")] {
         std::fs::write(&bad, content).unwrap();
         let out = run(&["--keep", bad.to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&out.stderr);
