@@ -25,8 +25,9 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
 use meshgnn_models::mesh_simplifier::{
-    DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
-    NeuralSimplifyOptions, SimplifierExample, SimplifierTraining, qem_importance,
+    CANDIDATE_FEATURES, DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
+    NeuralSimplifyOptions, SimplifierExample, SimplifierTraining, candidate_features,
+    qem_importance,
 };
 use meshgnn_models::training::{TrainingConfig, train};
 
@@ -127,22 +128,45 @@ fn evaluate(args: &[String]) -> AnyResult<()> {
 }
 
 /// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, what the face classifier could reach
-/// by reproducing a target among the trained sampler's picks: their Voronoi dual (the target
-/// it learnt), the QEM connectivity of the picks (every other vertex collapsed onto them,
-/// [`decimate_keeping`]), and for reference the dual of QEM's own vertex selection. Each as
-/// faces, WA and Chamfer distance over QEM's at the same face count.
+/// among the trained sampler's picks, beside what it reaches: their Voronoi dual (the target
+/// it learnt); the dual triangles among the edge predictor's candidates (the raw output of a
+/// classifier that never errs, with their recall); the trained classifier's raw output
+/// (`p_t > 0.5`); the candidates a restricted-Delaunay rule on two of the classifier's own
+/// input features keeps (empty circumsphere, normal agreement above 0.5); the QEM
+/// connectivity of the picks (every other vertex collapsed onto them, [`decimate_keeping`]);
+/// and for reference the dual of QEM's own vertex selection. Each as faces, WA and Chamfer
+/// distance over QEM's at the same face count.
 fn target_ceiling(args: &[String]) -> AnyResult<()> {
     let [weights, ratio, files @ ..] = args else {
         return Err("give the weights file, the vertex ratio and mesh files".into());
     };
     let model = NeuralMeshSimplifier::load(weights)?;
     let ratio: f64 = ratio.parse()?;
-    println!("file\tfaces\tpicks\tdual: faces WA CD/qem\tpicks' QEM\tdual of QEM's picks");
+    println!(
+        "file\tfaces\tpicks\tdual: faces WA CD/qem\tdual candidates (recall)\tclassifier\t\
+         Delaunay rule\tpicks' QEM\tdual of QEM's picks"
+    );
     for file in files {
         let mesh = meshgnn_geometry::read_mesh(file)?;
         let m = ((mesh.vertex_count() as f64) * ratio).round() as usize;
         let input = MeshInput::new(&mesh, model.device())?;
-        let picks = model.forward(&input, m, 0)?.sampled.indices;
+        let pass = model.forward(&input, m, 0)?;
+        let picks = &pass.sampled.indices;
+        let corners: Vec<[f32; 3]> = picks.iter().map(|&i| mesh.vertices()[i as usize]).collect();
+        let candidates = &pass.candidates.triangles;
+        let kept_candidates = |keep: &dyn Fn(usize) -> bool| {
+            let faces = (0..candidates.len()).filter(|&i| keep(i));
+            TriMesh::new(corners.clone(), faces.map(|i| candidates[i]).collect())
+        };
+        let labels: Vec<f32> = DualTargets::new(&mesh, &pass)?.face_labels.to_vec1()?;
+        let perfect_classifier = kept_candidates(&|i| labels[i] > 0.0)?;
+        let probabilities: Vec<f32> = pass.face_probabilities.to_vec1()?;
+        let classifier = kept_candidates(&|i| probabilities[i] > 0.5)?;
+        let normals: Vec<[f32; 3]> = picks.iter().map(|&i| input.normals[i as usize]).collect();
+        let features = candidate_features(&corners, &normals, candidates)?;
+        let feature = |i: usize, k: usize| features[i * CANDIDATE_FEATURES + k];
+        let delaunay_rule = kept_candidates(&|i| feature(i, 4) > 0.0 && feature(i, 0) > 0.5)?;
+        let dual = dual_mesh(&mesh, picks)?;
         // Faces, WA and CD over QEM's at the same face count; no distance without faces.
         let judged = |target: &TriMesh| -> AnyResult<String> {
             let faces = target.face_count();
@@ -169,7 +193,7 @@ fn target_ceiling(args: &[String]) -> AnyResult<()> {
                 keep_original_positions: true,
                 ..Default::default()
             },
-            &picks,
+            picks,
             &mut |_| {},
         )?;
         // QEM's selection stops short on some meshes (non-manifold regions): no figure then.
@@ -178,9 +202,13 @@ fn target_ceiling(args: &[String]) -> AnyResult<()> {
             Err(_) => "-".into(),
         };
         println!(
-            "{file}\t{}\t{m}\t{}\t{} ({} vertices)\t{qem_picks_dual}",
+            "{file}\t{}\t{m}\t{}\t{} ({:.3})\t{}\t{}\t{} ({} vertices)\t{qem_picks_dual}",
             mesh.face_count(),
-            judged(&dual_mesh(&mesh, &picks)?)?,
+            judged(&dual)?,
+            judged(&perfect_classifier)?,
+            perfect_classifier.face_count() as f64 / dual.face_count().max(1) as f64,
+            judged(&classifier)?,
+            judged(&delaunay_rule)?,
             judged(&collapsed.mesh)?,
             collapsed.mesh.vertex_count()
         );
