@@ -5,12 +5,14 @@
 //!
 //! `train EPOCHS` trains the model ([`SimplifierTraining`]) on the train families and reports
 //! the simplifications of the test families before and after; the best epoch's weights go to
-//! `mesh_simplifier.safetensors`, the resumable state to `mesh_simplifier.checkpoint`.
+//! `mesh_simplifier.safetensors`, the resumable state to `mesh_simplifier.checkpoint`. With
+//! `VALENCE_WEIGHT` the loss adds that multiple of the edge-valence excess; with `FROM` the
+//! training starts from those weights (a fine-tuning).
 //! `eval WEIGHTS RES...` reports trained weights on the test families at each resolution.
 //!
 //! ```text
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- [RES] [RATIO]
-//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- train EPOCHS [RES] [LR] [PER_FAMILY]
+//! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- train EPOCHS [RES] [LR] [PER_FAMILY] [VALENCE_WEIGHT] [FROM]
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- eval WEIGHTS RES...
 //! cargo run --release -p meshgnn-models --example mesh_simplifier_routes -- ceiling WEIGHTS RATIO FILE...
 //! ```
@@ -24,12 +26,13 @@ use meshgnn_graph::{
     fast_farthest_point_sampling, qem_vertices, weighted_sampling,
 };
 use meshgnn_losses::metrics::{chamfer_distance, watertightness};
+use meshgnn_models::Checkpoint;
 use meshgnn_models::mesh_simplifier::{
     CANDIDATE_FEATURES, DualTargets, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
     NeuralSimplifyOptions, SimplifierExample, SimplifierTraining, candidate_features,
     qem_importance,
 };
-use meshgnn_models::training::{TrainingConfig, train};
+use meshgnn_models::training::{Trainable, TrainingConfig, train};
 
 type AnyResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
@@ -221,6 +224,7 @@ fn train_model(args: &[String]) -> AnyResult<()> {
     let resolution: usize = args.get(1).map_or(Ok(32), |s| s.parse())?;
     let learning_rate: f64 = args.get(2).map_or(Ok(1e-3), |s| s.parse())?;
     let per_family: u64 = args.get(3).map_or(Ok(6), |s| s.parse())?;
+    let valence_weight: f64 = args.get(4).map_or(Ok(0.0), |s| s.parse())?;
     let mut train_set = Vec::new();
     let mut validation = Vec::new();
     for family in ShapeFamily::ALL.iter().filter(|f| f.split() == "train") {
@@ -240,7 +244,12 @@ fn train_model(args: &[String]) -> AnyResult<()> {
         validation,
         (0.05, 0.25),
         0,
-    )?;
+    )?
+    .with_valence_weight(valence_weight);
+    if let Some(weights) = args.get(5) {
+        let path = std::path::Path::new(weights);
+        task.restore(&Checkpoint::load(path)?, path)?;
+    }
     report(task.model(), &test, "epoch 0")?;
     let config = TrainingConfig {
         epochs,

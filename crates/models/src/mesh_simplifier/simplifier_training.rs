@@ -21,6 +21,7 @@ use candle_core::{DType, Device, Tensor, Var};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_geometry::TriMesh;
 use meshgnn_graph::qem_vertices;
+use meshgnn_losses::losses::edge_valence_excess;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
 use super::checkpoint::NEURAL_MESH_SIMPLIFIER_NAME;
@@ -98,6 +99,9 @@ pub struct SimplifierLosses {
     pub edges: Tensor,
     /// [`DualTargets::face_loss`].
     pub faces: Tensor,
+    /// [`edge_valence_excess`] of the face probabilities over the candidates, times the
+    /// training's valence weight.
+    pub valence: Tensor,
     /// Dual triangles among the candidates (their recall), for reports.
     pub candidate_recall: f64,
 }
@@ -105,7 +109,11 @@ pub struct SimplifierLosses {
 impl SimplifierLosses {
     /// The sum the optimiser minimises.
     pub fn total(&self) -> Result<Tensor> {
-        Ok(self.sampler.add(&self.edges)?.add(&self.faces)?)
+        Ok(self
+            .sampler
+            .add(&self.edges)?
+            .add(&self.faces)?
+            .add(&self.valence)?)
     }
 }
 
@@ -117,6 +125,7 @@ pub struct SimplifierTraining {
     train: Vec<SimplifierExample>,
     validation: Vec<SimplifierExample>,
     ratios: (f64, f64),
+    valence_weight: f64,
 }
 
 impl SimplifierTraining {
@@ -147,7 +156,15 @@ impl SimplifierTraining {
             train,
             validation,
             ratios,
+            valence_weight: 0.0,
         })
+    }
+
+    /// Adds `weight ·` [`edge_valence_excess`] of the face probabilities to the loss (0 by
+    /// default): the candidates on an edge then compete for its two faces.
+    pub fn with_valence_weight(mut self, weight: f64) -> Self {
+        self.valence_weight = weight;
+        self
     }
 
     /// The model being trained (shares its parameters).
@@ -177,10 +194,18 @@ impl SimplifierTraining {
             .add(&t.affine(-1.0, 1.0)?.mul(&p.affine(-1.0, 1.0)?.log()?)?)?
             .mean_all()?
             .neg()?;
+        let faces = &pass.candidates.triangles;
+        let valence = if faces.is_empty() || self.valence_weight == 0.0 {
+            pass.face_probabilities.zeros_like()?.sum_all()?
+        } else {
+            edge_valence_excess(faces, &pass.face_probabilities)?
+                .affine(self.valence_weight, 0.0)?
+        };
         Ok(SimplifierLosses {
             sampler,
             edges: targets.edge_loss(&pass)?,
             faces: targets.face_loss(&pass)?,
+            valence,
             candidate_recall: targets.candidate_hits as f64 / targets.dual_faces.max(1) as f64,
         })
     }
@@ -294,6 +319,31 @@ mod tests {
         let mean = importance.iter().sum::<f32>() / importance.len() as f32;
         assert!(mean < 0.5, "{mean}");
         assert!(importance.iter().all(|&v| v > 0.0 && v <= 1.0));
+    }
+
+    #[test]
+    fn the_valence_term_is_its_weight_times_the_excess_of_the_pass() {
+        let example = SimplifierExample::new(meshgnn_geometry::icosphere(3)).unwrap();
+        let task = |weight| {
+            SimplifierTraining::new(&small(), vec![example.clone()], vec![], (0.3, 0.3), 2)
+                .unwrap()
+                .with_valence_weight(weight)
+        };
+        let off = task(0.0).losses(&example, 0.3, 5).unwrap();
+        assert_eq!(off.valence.to_scalar::<f32>().unwrap(), 0.0);
+        let on = task(2.5);
+        let losses = on.losses(&example, 0.3, 5).unwrap();
+        let pass = on.model().forward(&example.input, 193, 5).unwrap();
+        let excess: f32 = edge_valence_excess(&pass.candidates.triangles, &pass.face_probabilities)
+            .unwrap()
+            .to_scalar()
+            .unwrap();
+        let valence: f32 = losses.valence.to_scalar().unwrap();
+        assert!(excess > 0.0, "an untrained classifier overfills some edge");
+        assert!(
+            (valence - 2.5 * excess).abs() <= 1e-5 * valence,
+            "{valence} vs {excess}"
+        );
     }
 
     #[test]
