@@ -129,25 +129,18 @@ mod tests {
                 .relu()
                 .unwrap();
             let got = linear_relu(x.clone(), &linear).unwrap();
-            let bits = |t: &Tensor| -> Vec<u64> {
-                let v: Vec<f64> = t
-                    .to_dtype(DType::F64)
+            let values = |t: &Tensor| -> Vec<f64> {
+                t.to_dtype(DType::F64)
                     .unwrap()
                     .flatten_all()
                     .unwrap()
                     .to_vec1()
-                    .unwrap();
-                v.iter().map(|v| v.to_bits()).collect()
+                    .unwrap()
             };
+            let bits = |t: &Tensor| -> Vec<u64> { values(t).iter().map(|v| v.to_bits()).collect() };
             assert_eq!(bits(&got), bits(&expected), "{dtype:?}");
             // Both signs occur, so the test sees the cut.
-            let v: Vec<f64> = got
-                .to_dtype(DType::F64)
-                .unwrap()
-                .flatten_all()
-                .unwrap()
-                .to_vec1()
-                .unwrap();
+            let v = values(&got);
             assert!(v.contains(&0.0) && v.iter().any(|&v| v > 0.0));
         }
         let unbiased = Linear::new(layer(DType::F32).weight().clone(), None);
