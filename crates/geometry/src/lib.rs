@@ -112,5 +112,8 @@ pub use tangent_chart_triangulation::{
     Reconstruction, TangentChartOptions, tangent_chart_triangulation,
 };
 pub use vertex_normals::vertex_normals;
-pub use voronoi_dual::{geodesic_voronoi_regions, voronoi_dual_triangles};
+pub use voronoi_dual::{
+    geodesic_voronoi_regions, nearest_seed_dual_triangles, nearest_seed_regions,
+    voronoi_dual_triangles,
+};
 pub use watertight::is_watertight;

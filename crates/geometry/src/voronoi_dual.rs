@@ -9,11 +9,20 @@
 //! For a dense, evenly spread set of seeds the dual is a closed manifold of the input's
 //! topology; for sparse or clumped seeds a region may not be a disc and the dual can carry
 //! non-manifold edges or holes (the neural simplifier's manifold pass removes those).
+//!
+//! The *nearest-seed* partition instead gives each vertex to its nearest seed in space (the
+//! Euclidean Voronoi diagram of the seeds, restricted to the mesh's vertices). Its dual is
+//! decided by the seeds' positions alone, up to the input's resolution, where the geodesic
+//! partition's dual also depends on the paths along the input's edges: where four seeds are
+//! nearly cocircular the two pick different diagonals (docs/mesh_simplifier_model.md).
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
+use crate::spatial_index::SpatialIndex;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{norm, sub, to_f64};
 
@@ -21,23 +30,7 @@ use crate::vec3::{norm, sub, to_f64};
 /// Errors when a seed is out of range or repeated.
 pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     let n = mesh.vertex_count();
-    let mut region = vec![u32::MAX; n];
-    for (s, &v) in seeds.iter().enumerate() {
-        let slot = region.get_mut(v as usize).ok_or(Error::IndexOutOfRange {
-            element: "seed",
-            index: s,
-            target: "vertex",
-            value: u64::from(v),
-            count: n,
-        })?;
-        if *slot != u32::MAX {
-            return Err(Error::InvalidParameter {
-                name: "seeds",
-                message: format!("vertex {v} given twice"),
-            });
-        }
-        *slot = s as u32;
-    }
+    let mut region = seed_regions(n, seeds)?;
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
     for t in mesh.triangles() {
         for k in 0..3 {
@@ -87,7 +80,67 @@ pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn voronoi_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32; 3]>> {
-    let region = geodesic_voronoi_regions(mesh, seeds)?;
+    Ok(dual_triangles(
+        mesh,
+        &geodesic_voronoi_regions(mesh, seeds)?,
+    ))
+}
+
+/// The nearest seed in space (index into `seeds`) of every vertex, ties to the lower index.
+/// Errors when a seed is out of range or repeated, or a position is not finite.
+pub fn nearest_seed_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
+    seed_regions(mesh.vertex_count(), seeds)?;
+    let v = mesh.vertices();
+    let positions: Vec<[f32; 3]> = seeds.iter().map(|&s| v[s as usize]).collect();
+    let index = SpatialIndex::new(&positions)?;
+    Ok(v.par_iter()
+        .map_init(Vec::new, |out, p| {
+            index.nearest(p, 1, None, out);
+            out.first().map_or(u32::MAX, |&(_, s)| s)
+        })
+        .collect())
+}
+
+/// The dual triangles of [`nearest_seed_regions`], as [`voronoi_dual_triangles`] gives those
+/// of the geodesic partition.
+///
+/// ```
+/// use meshgnn_geometry::{icosphere, nearest_seed_dual_triangles};
+/// let sphere = icosphere(2);
+/// let all: Vec<u32> = (0..sphere.vertex_count() as u32).collect();
+/// assert_eq!(nearest_seed_dual_triangles(&sphere, &all)?, sphere.triangles());
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn nearest_seed_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32; 3]>> {
+    Ok(dual_triangles(mesh, &nearest_seed_regions(mesh, seeds)?))
+}
+
+/// `u32::MAX` everywhere but at the seeds, which hold their index; errors when a seed is out
+/// of range or repeated.
+fn seed_regions(n: usize, seeds: &[u32]) -> Result<Vec<u32>> {
+    let mut region = vec![u32::MAX; n];
+    for (s, &v) in seeds.iter().enumerate() {
+        let slot = region.get_mut(v as usize).ok_or(Error::IndexOutOfRange {
+            element: "seed",
+            index: s,
+            target: "vertex",
+            value: u64::from(v),
+            count: n,
+        })?;
+        if *slot != u32::MAX {
+            return Err(Error::InvalidParameter {
+                name: "seeds",
+                message: format!("vertex {v} given twice"),
+            });
+        }
+        *slot = s as u32;
+    }
+    Ok(region)
+}
+
+/// Every face whose corners lie in three different regions, as the triangle of those regions,
+/// each once (the first face sets its orientation), in face order.
+fn dual_triangles(mesh: &TriMesh, region: &[u32]) -> Vec<[u32; 3]> {
     let mut seen = HashMap::new();
     let mut triangles = Vec::new();
     for t in mesh.triangles() {
@@ -101,7 +154,7 @@ pub fn voronoi_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32;
             triangles.push(r);
         });
     }
-    Ok(triangles)
+    triangles
 }
 
 #[cfg(test)]
@@ -145,6 +198,56 @@ mod tests {
         assert!(is_edge_manifold(&mesh));
         assert_eq!(mesh.face_count(), 320);
         assert!(is_watertight(&mesh));
+    }
+
+    #[test]
+    fn nearest_seed_regions_follow_space_where_geodesic_regions_follow_the_surface() {
+        // A strip two vertices wide folded in two: columns 0-5 lie at z = 0, x = column;
+        // columns 6-10 come back at z = 0.1, x = 10 − column. Vertex 2c + w is (column c,
+        // row w). Seed A is vertex 0 (0, 0, 0), seed B vertex 18 (1, 0, 0.1), right above
+        // column 1.
+        let v: Vec<[f32; 3]> = (0..=10)
+            .flat_map(|c| {
+                (0..2).map(move |w| match c {
+                    0..=5 => [c as f32, w as f32, 0.0],
+                    _ => [(10 - c) as f32, w as f32, 0.1],
+                })
+            })
+            .collect();
+        let f: Vec<[u32; 3]> = (0..10u32)
+            .flat_map(|c| [[2 * c, 2 * c + 2, 2 * c + 3], [2 * c, 2 * c + 3, 2 * c + 1]])
+            .collect();
+        let strip = TriMesh::new(v, f).unwrap();
+        let seeds = [0, 18];
+        let column = |regions: Vec<u32>| -> Vec<u32> {
+            assert!(regions.chunks(2).all(|r| r[0] == r[1]), "{regions:?}");
+            regions.iter().step_by(2).copied().collect()
+        };
+        // In space, column c ≤ 5 is nearer B once c ≥ 1 (c² > (c − 1)² + 0.01), and the upper
+        // half is nearer B up to column 9; column 10 sits 0.1 above A.
+        assert_eq!(
+            column(nearest_seed_regions(&strip, &seeds).unwrap()),
+            [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0]
+        );
+        // Along the surface, columns 0-4 are nearer A, and column 5 is 4.005 from B.
+        assert_eq!(
+            column(geodesic_voronoi_regions(&strip, &seeds).unwrap()),
+            [0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1]
+        );
+    }
+
+    #[test]
+    fn evenly_spread_seeds_give_the_same_closed_nearest_seed_dual() {
+        let fine = icosphere(4);
+        let seeds: Vec<u32> = (0..162).collect();
+        let dual = nearest_seed_dual_triangles(&fine, &seeds).unwrap();
+        let corners: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
+        let mesh = TriMesh::new(corners, dual).unwrap();
+        assert!(is_edge_manifold(&mesh));
+        assert_eq!(mesh.face_count(), 320);
+        assert!(is_watertight(&mesh));
+        assert!(nearest_seed_regions(&fine, &[3, 3]).is_err());
+        assert!(nearest_seed_regions(&fine, &[99_999]).is_err());
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Routes for training the neural mesh simplifier (docs/mesh_simplifier_model.md, "Training"):
-//! how good the Voronoi-dual face targets are (their candidate recall, and the dual mesh itself
-//! against QEM at the same face count) for the thesis' multinomial draw, the balanced draw of
-//! the untrained sampler's probabilities and of the QEM importance, and FPS picks.
+//! how good the nearest-seed Voronoi-dual face targets are (their candidate recall, and the
+//! dual mesh itself against QEM at the same face count) for the thesis' multinomial draw, the
+//! balanced draw of the untrained sampler's probabilities and of the QEM importance, and FPS
+//! picks.
 //!
 //! `train EPOCHS` trains the model ([`SimplifierTraining`]) on the train families and reports
 //! the simplifications of the test families before and after; the best epoch's weights go to
@@ -20,7 +21,7 @@
 use candle_core::{DType, Device};
 use candle_nn::{VarBuilder, VarMap};
 use meshgnn_data::{ShapeFamily, shape_mesh};
-use meshgnn_geometry::{TriMesh, boundary_loops, sample_surface, voronoi_dual_triangles};
+use meshgnn_geometry::{TriMesh, boundary_loops, nearest_seed_dual_triangles, sample_surface};
 use meshgnn_graph::{
     DecimationOptions, FpsStart, Target, balanced_sampling, decimate, decimate_keeping,
     fast_farthest_point_sampling, qem_vertices, weighted_sampling,
@@ -37,7 +38,7 @@ use meshgnn_models::training::{Trainable, TrainingConfig, train};
 type AnyResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
 fn dual_mesh(mesh: &TriMesh, picks: &[u32]) -> AnyResult<TriMesh> {
-    let faces = voronoi_dual_triangles(mesh, picks)?;
+    let faces = nearest_seed_dual_triangles(mesh, picks)?;
     let corners = picks.iter().map(|&i| mesh.vertices()[i as usize]).collect();
     Ok(TriMesh::new(corners, faces)?)
 }
@@ -131,8 +132,8 @@ fn evaluate(args: &[String]) -> AnyResult<()> {
 }
 
 /// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, what the face classifier could reach
-/// among the trained sampler's picks, beside what it reaches: their Voronoi dual (the target
-/// it learnt); the dual triangles among the edge predictor's candidates (the raw output of a
+/// among the trained sampler's picks, beside what it reaches: their nearest-seed Voronoi dual
+/// (the target it learnt); the dual triangles among the edge predictor's candidates (the raw output of a
 /// classifier that never errs, with their recall); the trained classifier's raw output
 /// (`p_t > 0.5`); the candidates a restricted-Delaunay rule on two of the classifier's own
 /// input features keeps (empty circumsphere, normal agreement above 0.5); the QEM
@@ -161,12 +162,12 @@ fn target_ceiling(args: &[String]) -> AnyResult<()> {
             let faces = (0..candidates.len()).filter(|&i| keep(i));
             TriMesh::new(corners.clone(), faces.map(|i| candidates[i]).collect())
         };
-        let labels: Vec<f32> = DualTargets::new(&mesh, &pass)?.face_labels.to_vec1()?;
+        let labels: Vec<f32> = DualTargets::new(&pass)?.face_labels.to_vec1()?;
         let perfect_classifier = kept_candidates(&|i| labels[i] > 0.0)?;
         let probabilities: Vec<f32> = pass.face_probabilities.to_vec1()?;
         let classifier = kept_candidates(&|i| probabilities[i] > 0.5)?;
         let normals: Vec<[f32; 3]> = picks.iter().map(|&i| input.normals[i as usize]).collect();
-        let features = candidate_features(&corners, &normals, candidates)?;
+        let features = candidate_features(&corners, &normals, candidates, &pass.dual)?;
         let feature = |i: usize, k: usize| features[i * CANDIDATE_FEATURES + k];
         let delaunay_rule = kept_candidates(&|i| feature(i, 4) > 0.0 && feature(i, 0) > 0.5)?;
         let dual = dual_mesh(&mesh, picks)?;
@@ -324,7 +325,7 @@ fn main() -> AnyResult<()> {
         for (name, picks) in routes {
             let dual = dual_mesh(&mesh, &picks)?;
             let recall = if name == "balanced" {
-                let targets = DualTargets::new(&mesh, &pass)?;
+                let targets = DualTargets::new(&pass)?;
                 format!(
                     "{:.3} of {}",
                     targets.candidate_hits as f64 / targets.dual_faces.max(1) as f64,

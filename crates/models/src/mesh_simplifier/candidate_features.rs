@@ -13,10 +13,17 @@
 //! 4. **emptiness** of the triangle's circumsphere (centre in its plane): the smallest
 //!    `(|q − c|² − R²) / R²` over the `EMPTINESS_NEIGHBOURS` sampled vertices nearest the
 //!    centre other than the corners, clamped to `[−1, 1]` (negative: some vertex intrudes, as
-//!    in no Delaunay triangle).
+//!    in no Delaunay triangle);
+//! 5. **dual membership**: 1 when the triangle is one of the nearest-seed dual of the sampled
+//!    vertices over the input ([`meshgnn_geometry::nearest_seed_dual_triangles`]), else 0.
+//!    Features 0-4 see the sampled vertices only, so where four of them are nearly
+//!    cocircular both diagonals look alike and a classifier keeps both (raw WA 70 %,
+//!    docs/mesh_simplifier_model.md); the input surface between them decides.
 //!
-//! Positions only, so computed once on the host per pass, in the unit-sphere frame, one
-//! triangle per parallel task.
+//! Computed once on the host per pass, in the unit-sphere frame, one triangle per parallel
+//! task.
+
+use std::collections::HashSet;
 
 use meshgnn_geometry::SpatialIndex;
 use meshgnn_geometry::vec3::{cross, dot, norm, sub, to_f64};
@@ -25,19 +32,22 @@ use rayon::prelude::*;
 use crate::Result;
 
 /// Features per candidate.
-pub const CANDIDATE_FEATURES: usize = 5;
+pub const CANDIDATE_FEATURES: usize = 6;
 
 /// Sampled vertices nearest a circumcentre checked for intrusion.
 const EMPTINESS_NEIGHBOURS: usize = 8;
 
 /// The features of `triangles` over the sampled `corners` (with the input's unit vertex
-/// `normals` at them), `#F×CANDIDATE_FEATURES`, row-major.
+/// `normals` at them and their nearest-seed `dual`, in the same numbering),
+/// `#F×CANDIDATE_FEATURES`, row-major.
 pub fn candidate_features(
     corners: &[[f32; 3]],
     normals: &[[f32; 3]],
     triangles: &[[u32; 3]],
+    dual: &[[u32; 3]],
 ) -> Result<Vec<f32>> {
     let index = SpatialIndex::new(corners)?;
+    let dual: HashSet<[u32; 3]> = dual.iter().map(sorted_corners).collect();
     let spacing: Vec<f64> = (0..corners.len())
         .into_par_iter()
         .map_init(Vec::new, |out, i| {
@@ -80,11 +90,19 @@ pub fn candidate_features(
                 (shortest / h).min(10.0),
                 smallest_angle / std::f64::consts::FRAC_PI_3,
                 emptiness,
+                f64::from(u8::from(dual.contains(&sorted_corners(t)))),
             ]
             .map(|f| f as f32)
         })
         .collect();
     Ok(rows.into_flattened())
+}
+
+/// The corners in increasing order: one key for a triangle however it is oriented.
+pub(crate) fn sorted_corners(t: &[u32; 3]) -> [u32; 3] {
+    let mut key = *t;
+    key.sort_unstable();
+    key
 }
 
 /// Feature 4 of the module docs; −1 (crowded) for a degenerate triangle, which has no circle.
@@ -131,9 +149,10 @@ mod tests {
             [0.5, 0.0, 3.0],
         ];
         let n = [[0.0, 0.0, 1.0]; 5];
-        let f = candidate_features(&v, &n, &[[0, 1, 2], [0, 1, 4]]).unwrap();
+        // The dual holds the first triangle, the other way round.
+        let f = candidate_features(&v, &n, &[[0, 1, 2], [0, 1, 4]], &[[2, 1, 0]]).unwrap();
         let first = &f[..CANDIDATE_FEATURES];
-        let want = [1.0, 2f32.sqrt(), 1.0, 0.75, 0.0];
+        let want = [1.0, 2f32.sqrt(), 1.0, 0.75, 0.0, 1.0];
         for (got, want) in first.iter().zip(want) {
             assert!((got - want).abs() < 1e-5, "{first:?}");
         }
@@ -143,10 +162,11 @@ mod tests {
         // and 3 lie 1 off its plane, at |q − c|² = R² + 1.
         let r2 = 0.25 + (35.0f32 / 24.0).powi(2);
         assert!((second[4] - 1.0 / r2).abs() < 1e-5, "{second:?}");
+        assert_eq!(second[5], 0.0, "not in the dual");
         // A vertex inside the first circle: |q − c|² = 0.01 against R² = 0.5.
         let mut crowded = v.to_vec();
         crowded.push([0.6, 0.5, 0.0]);
-        let f = candidate_features(&crowded, &[[0.0, 0.0, 1.0]; 6], &[[0, 1, 2]]).unwrap();
+        let f = candidate_features(&crowded, &[[0.0, 0.0, 1.0]; 6], &[[0, 1, 2]], &[]).unwrap();
         assert!((f[4] + 0.98).abs() < 1e-5, "{f:?}");
     }
 }

@@ -47,15 +47,15 @@ fn edge_extremes(corners: [[f32; 3]; 3]) -> [f32; 6] {
 
 impl FaceGraph {
     /// The graph of `triangles` (indices into `vertices`, whose unit `normals` are the input
-    /// surface's there), each linked to its `k` nearest (by barycentre; fewer when there are
-    /// not `k + 1` candidates).
+    /// surface's there, and whose nearest-seed `dual` over the input is given), each linked
+    /// to its `k` nearest (by barycentre; fewer when there are not `k + 1` candidates).
     ///
     /// ```
     /// use candle_core::Device;
     /// use meshgnn_models::mesh_simplifier::FaceGraph;
     /// let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
     /// let n = [[0.0, 0.0, 1.0]; 4];
-    /// let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [1, 2, 3]], 20, &Device::Cpu)?;
+    /// let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [1, 2, 3]], &[[0, 1, 2]], 20, &Device::Cpu)?;
     /// assert_eq!((g.len(), g.width()), (2, 1));
     /// # Ok::<(), meshgnn_models::Error>(())
     /// ```
@@ -63,6 +63,7 @@ impl FaceGraph {
         vertices: &[[f32; 3]],
         normals: &[[f32; 3]],
         triangles: &[[u32; 3]],
+        dual: &[[u32; 3]],
         k: usize,
         device: &Device,
     ) -> Result<Self> {
@@ -81,7 +82,7 @@ impl FaceGraph {
                 extremes.into_iter().chain(centre.iter().copied())
             })
             .collect();
-        let features = candidate_features(vertices, normals, triangles)?;
+        let features = candidate_features(vertices, normals, triangles, dual)?;
         Ok(Self {
             neighbours: Tensor::from_vec(neighbours, len * width, device)?,
             descriptors: Tensor::from_vec(descriptors, (len, 9), device)?,
@@ -120,7 +121,7 @@ mod tests {
             [0.0, 0.0, 3.0],
         ];
         let n = [[0.0, 0.0, 1.0]; 4];
-        let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [0, 1, 3]], 5, &Device::Cpu).unwrap();
+        let g = FaceGraph::new(&v, &n, &[[0, 1, 2], [0, 1, 3]], &[], 5, &Device::Cpu).unwrap();
         // t0: e01 = (-2,0,0), e02 = (0,-2,0), e12 = (2,-2,0) → min (-2,-2,0), max (2,0,0),
         //     barycentre (2/3, 2/3, 0).
         // t1: e01 = (-2,0,0), e03 = (0,0,-3), e13 = (2,0,-3) → min (-2,0,-3), max (2,0,0),
@@ -144,7 +145,7 @@ mod tests {
         }
         let links: Vec<u32> = g.neighbours.to_vec1().unwrap();
         assert_eq!(links, vec![1, 0]);
-        let one = FaceGraph::new(&v, &n, &[[0, 1, 2]], 5, &Device::Cpu).unwrap();
+        let one = FaceGraph::new(&v, &n, &[[0, 1, 2]], &[], 5, &Device::Cpu).unwrap();
         assert_eq!((one.len(), one.width()), (1, 0));
     }
 }

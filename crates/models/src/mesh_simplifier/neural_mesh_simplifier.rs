@@ -19,8 +19,8 @@
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_geometry::{
-    TriMesh, boundary_loops, close_cracks, fill_holes, select_manifold_faces,
-    unit_sphere_normalization, vertex_normals,
+    TriMesh, boundary_loops, close_cracks, fill_holes, nearest_seed_dual_triangles,
+    select_manifold_faces, unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
     CsrMatrix, Target, hilbert_order, region_quadric_placement, systematic_sampling,
@@ -61,8 +61,8 @@ pub struct NeuralMeshSimplifierConfig {
 /// A mesh prepared for the network: unit-sphere positions and the graph structures.
 #[derive(Clone, Debug)]
 pub struct MeshInput {
-    /// Vertex positions scaled to the unit sphere, `#N×3`.
-    pub positions: Vec<[f32; 3]>,
+    /// The mesh scaled to the unit sphere.
+    pub surface: TriMesh,
     /// The same as a tensor, `(N, 3)`.
     pub tensor: Tensor,
     /// Unit vertex normals (the scaling keeps them).
@@ -87,7 +87,7 @@ impl MeshInput {
         let slots = NeighbourSlots::from_adjacency(&adjacency, device)?;
         let tensor = Tensor::from_slice(positions.as_flattened(), (positions.len(), 3), device)?;
         Ok(Self {
-            positions,
+            surface: TriMesh::new(positions, mesh.triangles().to_vec())?,
             tensor,
             normals: vertex_normals(mesh),
             adjacency,
@@ -107,6 +107,10 @@ pub struct SimplifierPass {
     pub edge_weights: Tensor,
     /// The candidate triangles (sampled-vertex numbering) and their eq. 6.5 prior.
     pub candidates: CandidateFaces,
+    /// The nearest-seed dual of the sampled vertices over the input
+    /// ([`meshgnn_geometry::nearest_seed_dual_triangles`], sampled-vertex numbering): the
+    /// face classifier reads which candidates belong to it, and training takes it as target.
+    pub dual: Vec<[u32; 3]>,
     /// `p_t` of every candidate, `(F)`.
     pub face_probabilities: Tensor,
 }
@@ -203,12 +207,16 @@ impl NeuralMeshSimplifier {
         seed: u64,
         progress: &mut dyn FnMut(f64),
     ) -> Result<SimplifierPass> {
-        let sampled =
-            self.sampler
-                .sample(&input.tensor, &input.positions, &input.slots, target, seed)?;
+        let sampled = self.sampler.sample(
+            &input.tensor,
+            input.surface.vertices(),
+            &input.slots,
+            target,
+            seed,
+        )?;
         progress(0.05);
         let graph = ExtendedGraph::new(
-            &input.positions,
+            input.surface.vertices(),
             &input.adjacency,
             &sampled.indices,
             self.config.edges.neighbours,
@@ -218,10 +226,11 @@ impl NeuralMeshSimplifier {
         let prediction = self.edges.forward(&input.tensor, &graph)?;
         let candidates = prediction.candidate_faces(&graph)?;
         progress(0.3);
+        let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
         let corners: Vec<[f32; 3]> = sampled
             .indices
             .iter()
-            .map(|&i| input.positions[i as usize])
+            .map(|&i| input.surface.vertices()[i as usize])
             .collect();
         let corner_normals: Vec<[f32; 3]> = sampled
             .indices
@@ -232,6 +241,7 @@ impl NeuralMeshSimplifier {
             &corners,
             &corner_normals,
             &candidates.triangles,
+            &dual,
             self.config.faces.neighbours,
             &self.device,
         )?;
@@ -243,6 +253,7 @@ impl NeuralMeshSimplifier {
             graph,
             edge_weights: prediction.adjacency,
             candidates,
+            dual,
             face_probabilities,
         })
     }

@@ -13,7 +13,7 @@
 //!   classifier's neighbourhood, ch. 6.4).
 
 use candle_core::Tensor;
-use meshgnn_geometry::{TriMesh, sample_surface};
+use meshgnn_geometry::sample_surface;
 use meshgnn_losses::losses::{
     ReverseSurfaceParams, SimplificationTerms, SimplificationWeights, edge_crossings,
     probabilistic_chamfer, probabilistic_surface_forward, probabilistic_surface_reverse,
@@ -37,13 +37,13 @@ pub struct SimplificationTarget {
 }
 
 impl SimplificationTarget {
-    /// The target of `mesh` as `input` saw it: its faces over the unit-sphere positions, with
-    /// `samples` surface points drawn with `seed`.
-    pub fn new(mesh: &TriMesh, input: &MeshInput, samples: usize, seed: u64) -> Result<Self> {
-        let unit = TriMesh::new(input.positions.clone(), mesh.triangles().to_vec())?;
+    /// The target of the mesh `input` holds, in its unit-sphere frame, with `samples` surface
+    /// points drawn with `seed`.
+    pub fn new(input: &MeshInput, samples: usize, seed: u64) -> Result<Self> {
+        let unit = &input.surface;
         let barycentres: Vec<[f32; 3]> =
             meshgnn_graph::triangle_barycentres(unit.vertices(), unit.triangles())?;
-        let points = sample_surface(&unit, samples, seed)?.points;
+        let points = sample_surface(unit, samples, seed)?.points;
         let device = input.tensor.device();
         Ok(Self {
             barycentres: Tensor::from_slice(
@@ -77,7 +77,7 @@ pub fn simplification_terms(
     let sample_probabilities = pass.sampled.probabilities.index_select(&index, 0)?;
     let corners: Vec<[f32; 3]> = sampled
         .iter()
-        .map(|&i| input.positions[i as usize])
+        .map(|&i| input.surface.vertices()[i as usize])
         .collect();
     let p = &pass.face_probabilities;
     // A lone candidate has no neighbour to collide with, cross or overlap.
@@ -142,7 +142,7 @@ mod tests {
         let model = NeuralMeshSimplifier::new(vb, &config).unwrap();
         let mesh = meshgnn_geometry::icosphere(3);
         let input = MeshInput::new(&mesh, &Device::Cpu).unwrap();
-        let target = SimplificationTarget::new(&mesh, &input, 2000, 1).unwrap();
+        let target = SimplificationTarget::new(&input, 2000, 1).unwrap();
         let pass = model.forward(&input, 160, 2).unwrap();
         let terms = simplification_terms(&pass, &input, &target).unwrap();
         for (name, t) in [

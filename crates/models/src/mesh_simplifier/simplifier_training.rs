@@ -5,8 +5,8 @@
 //! - the **point sampler** the QEM importance of each vertex ([`qem_importance`]), as a
 //!   binary cross-entropy with soft labels, so its inclusion probabilities are dense where a
 //!   quadric decimation keeps vertices (creases, thin parts) and sparse on flat regions;
-//! - the **edge predictor** and the **face classifier** the Voronoi dual of the drawn vertices
-//!   ([`DualTargets`]).
+//! - the **edge predictor** and the **face classifier** the nearest-seed Voronoi dual of the
+//!   drawn vertices ([`DualTargets`]).
 //!
 //! # Conventions
 //! - Step `s` draws each mesh's vertex ratio uniformly from `ratios` and the sampler's seed
@@ -183,7 +183,7 @@ impl SimplifierTraining {
         let n = example.mesh.vertex_count();
         let target = ((n as f64 * ratio).round() as usize).clamp(3, n);
         let pass = self.model.forward(&example.input, target, seed)?;
-        let targets = DualTargets::new(&example.mesh, &pass)?;
+        let targets = DualTargets::new(&pass)?;
         let p = pass
             .sampled
             .probabilities

@@ -121,9 +121,9 @@ mod tests {
         .unwrap();
         let (v, t) = strip();
         let up = vec![[0.0, 0.0, 1.0]; v.len()];
-        let graph = FaceGraph::new(&v, &up, &t, 3, &Device::Cpu).unwrap();
+        let graph = FaceGraph::new(&v, &up, &t, &[], 3, &Device::Cpu).unwrap();
         let moved: Vec<[f32; 3]> = v.iter().map(|p| [p[0] + 5.0, p[1] - 2.0, p[2]]).collect();
-        let moved = FaceGraph::new(&moved, &up, &t, 3, &Device::Cpu).unwrap();
+        let moved = FaceGraph::new(&moved, &up, &t, &[], 3, &Device::Cpu).unwrap();
         let f0: Vec<f64> = (0..12).map(|i| ((i * 7 % 5) as f64 - 2.0) * 0.3).collect();
         let x = Tensor::from_slice(&f0, (6, 2), &Device::Cpu).unwrap();
         let a: Vec<Vec<f64>> = conv.forward(&x, &graph).unwrap().to_vec2().unwrap();
@@ -157,7 +157,7 @@ mod tests {
         .unwrap();
         let (v, t) = strip();
         let up = vec![[0.0, 0.0, 1.0]; v.len()];
-        let graph = FaceGraph::new(&v, &up, &t, 3, &Device::Cpu).unwrap();
+        let graph = FaceGraph::new(&v, &up, &t, &[], 3, &Device::Cpu).unwrap();
         let f0: Vec<f64> = (0..18).map(|i| ((i * 5 % 7) as f64 - 3.0) * 0.4).collect();
         let x = Tensor::from_slice(&f0, (6, 3), &Device::Cpu).unwrap();
         // MLP([r_nk ‖ f_n − f_k]) per link, then the mean over the links.
@@ -205,7 +205,7 @@ mod tests {
         .unwrap();
         let (v, _) = strip();
         let up = vec![[0.0, 0.0, 1.0]; v.len()];
-        let graph = FaceGraph::new(&v, &up, &[[0, 1, 2]], 20, &Device::Cpu).unwrap();
+        let graph = FaceGraph::new(&v, &up, &[[0, 1, 2]], &[], 20, &Device::Cpu).unwrap();
         let x = Tensor::ones((1, 1), DType::F32, &Device::Cpu).unwrap();
         let y: Vec<Vec<f32>> = conv.forward(&x, &graph).unwrap().to_vec2().unwrap();
         assert_eq!(y, vec![vec![0.0; 3]]);
