@@ -133,10 +133,10 @@ fn evaluate(args: &[String]) -> AnyResult<()> {
 
 /// `ceiling WEIGHTS RATIO FILE...`: on each mesh file, what the face classifier could reach
 /// among the trained sampler's picks, beside what it reaches: their nearest-seed Voronoi dual
-/// (the target it learnt); the dual triangles among the edge predictor's candidates (the raw output of a
-/// classifier that never errs, with their recall); the trained classifier's raw output
-/// (`p_t > 0.5`); the candidates a restricted-Delaunay rule on two of the classifier's own
-/// input features keeps (empty circumsphere, normal agreement above 0.5); the QEM
+/// (the target it learnt); the dual triangles among the edge predictor's candidates (the raw
+/// output of a classifier that never errs, with their recall); the trained classifier's raw
+/// output (`p_t > 0.5`); the candidates a restricted-Delaunay rule on two of the classifier's
+/// own input features keeps (empty circumsphere, normal agreement above 0.5); the QEM
 /// connectivity of the picks (every other vertex collapsed onto them, [`decimate_keeping`]);
 /// and for reference the dual of QEM's own vertex selection. Each as faces, WA and Chamfer
 /// distance over QEM's at the same face count.

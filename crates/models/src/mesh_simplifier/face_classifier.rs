@@ -53,7 +53,8 @@ impl FaceClassifier {
     /// let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
     /// let classifier = FaceClassifier::new(vb, &FaceClassifierConfig::default())?;
     /// let mesh = meshgnn_geometry::icosphere(1);
-    /// let graph = FaceGraph::new(mesh.vertices(), mesh.vertices(), mesh.triangles(), &[], 20, &Device::Cpu)?;
+    /// let (v, t) = (mesh.vertices(), mesh.triangles());
+    /// let graph = FaceGraph::new(v, v, t, &[], 20, &Device::Cpu)?;
     /// let prior = Tensor::full(0.5f32, 80, &Device::Cpu)?;
     /// assert_eq!(classifier.forward(&prior, &graph)?.dims(), &[80]);
     /// # Ok::<(), meshgnn_models::Error>(())
