@@ -11,10 +11,11 @@
 //! non-manifold edges or holes (the neural simplifier's manifold pass removes those).
 //!
 //! The *nearest-seed* partition instead gives each vertex to its nearest seed in space (the
-//! Euclidean Voronoi diagram of the seeds, restricted to the mesh's vertices). Its dual is
-//! decided by the seeds' positions alone, up to the input's resolution, where the geodesic
-//! partition's dual also depends on the paths along the input's edges: where four seeds are
-//! nearly cocircular the two pick different diagonals (docs/mesh_simplifier_model.md).
+//! Euclidean Voronoi diagram of the seeds, restricted to the mesh's vertices) among those
+//! facing the same side. Its dual is decided by the seeds' positions and normals alone, up to
+//! the input's resolution, where the geodesic partition's dual also depends on the paths along
+//! the input's edges: where four seeds are nearly cocircular the two pick different diagonals
+//! (docs/mesh_simplifier_model.md).
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
@@ -24,7 +25,8 @@ use rayon::prelude::*;
 use crate::error::{Error, Result};
 use crate::spatial_index::SpatialIndex;
 use crate::tri_mesh::TriMesh;
-use crate::vec3::{norm, sub, to_f64};
+use crate::vec3::{dot, norm, sub, to_f64};
+use crate::vertex_normals::vertex_normals;
 
 /// The region (index into `seeds`) of every vertex; `u32::MAX` for vertices no seed reaches.
 /// Errors when a seed is out of range or repeated.
@@ -86,17 +88,31 @@ pub fn voronoi_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32;
     ))
 }
 
-/// The nearest seed in space (index into `seeds`) of every vertex, ties to the lower index.
-/// Errors when a seed is out of range or repeated, or a position is not finite.
+/// Seeds nearest a vertex among which [`nearest_seed_regions`] looks for one facing its way.
+const FACING_CANDIDATES: usize = 8;
+
+/// The region (index into `seeds`) of every vertex: the nearest seed in space whose vertex
+/// normal points to the same side as the vertex's (positive dot product) among its
+/// `FACING_CANDIDATES` nearest, else the nearest; ties to the lower index. The normal test
+/// keeps the two sides of a thin part (a limb, a plate) in regions of their own, as paths
+/// along the surface would. Errors when a seed is out of range or repeated, or a position is
+/// not finite.
 pub fn nearest_seed_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     seed_regions(mesh.vertex_count(), seeds)?;
     let v = mesh.vertices();
+    let normals = vertex_normals(mesh);
     let positions: Vec<[f32; 3]> = seeds.iter().map(|&s| v[s as usize]).collect();
+    let seed_normals: Vec<[f64; 3]> = seeds.iter().map(|&s| to_f64(normals[s as usize])).collect();
     let index = SpatialIndex::new(&positions)?;
     Ok(v.par_iter()
-        .map_init(Vec::new, |out, p| {
-            index.nearest(p, 1, None, out);
-            out.first().map_or(u32::MAX, |&(_, s)| s)
+        .zip(&normals)
+        .map_init(Vec::new, |out, (p, n)| {
+            index.nearest(p, FACING_CANDIDATES, None, out);
+            let n = to_f64(*n);
+            let facing = out
+                .iter()
+                .find(|&&(_, s)| dot(n, seed_normals[s as usize]) > 0.0);
+            facing.or(out.first()).map_or(u32::MAX, |&(_, s)| s)
         })
         .collect())
 }
@@ -201,38 +217,27 @@ mod tests {
     }
 
     #[test]
-    fn nearest_seed_regions_follow_space_where_geodesic_regions_follow_the_surface() {
-        // A strip two vertices wide folded in two: columns 0-5 lie at z = 0, x = column;
-        // columns 6-10 come back at z = 0.1, x = 10 − column. Vertex 2c + w is (column c,
-        // row w). Seed A is vertex 0 (0, 0, 0), seed B vertex 18 (1, 0, 0.1), right above
-        // column 1.
-        let v: Vec<[f32; 3]> = (0..=10)
-            .flat_map(|c| {
-                (0..2).map(move |w| match c {
-                    0..=5 => [c as f32, w as f32, 0.0],
-                    _ => [(10 - c) as f32, w as f32, 0.1],
-                })
-            })
-            .collect();
-        let f: Vec<[u32; 3]> = (0..10u32)
-            .flat_map(|c| [[2 * c, 2 * c + 2, 2 * c + 3], [2 * c, 2 * c + 3, 2 * c + 1]])
-            .collect();
-        let strip = TriMesh::new(v, f).unwrap();
-        let seeds = [0, 18];
-        let column = |regions: Vec<u32>| -> Vec<u32> {
-            assert!(regions.chunks(2).all(|r| r[0] == r[1]), "{regions:?}");
-            regions.iter().step_by(2).copied().collect()
-        };
-        // In space, column c ≤ 5 is nearer B once c ≥ 1 (c² > (c − 1)² + 0.01), and the upper
-        // half is nearer B up to column 9; column 10 sits 0.1 above A.
+    fn the_two_sides_of_a_thin_sheet_never_share_a_nearest_seed() {
+        // Two 4×2 grids 0.1 apart: the lower one faces −z (vertices 0-7), the upper one +z
+        // (vertices 8-15); vertex 4y + x sits at (x, y). Seed A is the lower (0, 0), seed B
+        // the upper (3, 0). The lower (3, 0) is 0.1 from B and 3 from A, yet faces away from
+        // B: every lower vertex joins A, every upper one B, as paths along the sheets say.
+        let grid = |z: f32| (0..2).flat_map(move |y| (0..4).map(move |x| [x as f32, y as f32, z]));
+        let v: Vec<[f32; 3]> = grid(0.0).chain(grid(0.1)).collect();
+        let mut f = Vec::new();
+        for x in 0..3u32 {
+            f.push([x, x + 5, x + 1]);
+            f.push([x, x + 4, x + 5]);
+            f.push([8 + x, 9 + x, 13 + x]);
+            f.push([8 + x, 13 + x, 12 + x]);
+        }
+        let sheet = TriMesh::new(v, f).unwrap();
+        let regions = nearest_seed_regions(&sheet, &[0, 11]).unwrap();
+        assert_eq!(regions, [[0; 8], [1; 8]].concat());
+        // In space alone the lower (2, y) and (3, y) would be nearer B.
         assert_eq!(
-            column(nearest_seed_regions(&strip, &seeds).unwrap()),
-            [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0]
-        );
-        // Along the surface, columns 0-4 are nearer A, and column 5 is 4.005 from B.
-        assert_eq!(
-            column(geodesic_voronoi_regions(&strip, &seeds).unwrap()),
-            [0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1]
+            geodesic_voronoi_regions(&sheet, &[0, 11]).unwrap()[..8],
+            [0; 8]
         );
     }
 
