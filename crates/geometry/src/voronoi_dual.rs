@@ -208,12 +208,13 @@ mod tests {
         // The vertices of icosphere(2) are the first 162 of icosphere(4) (subdivision keeps
         // the old vertices first).
         let seeds: Vec<u32> = (0..162).collect();
-        let dual = voronoi_dual_triangles(&fine, &seeds).unwrap();
         let corners: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
-        let mesh = TriMesh::new(corners, dual).unwrap();
-        assert!(is_edge_manifold(&mesh));
-        assert_eq!(mesh.face_count(), 320);
-        assert!(is_watertight(&mesh));
+        for dual in [voronoi_dual_triangles, nearest_seed_dual_triangles] {
+            let mesh = TriMesh::new(corners.clone(), dual(&fine, &seeds).unwrap()).unwrap();
+            assert!(is_edge_manifold(&mesh));
+            assert_eq!(mesh.face_count(), 320);
+            assert!(is_watertight(&mesh));
+        }
     }
 
     #[test]
@@ -242,24 +243,12 @@ mod tests {
     }
 
     #[test]
-    fn evenly_spread_seeds_give_the_same_closed_nearest_seed_dual() {
-        let fine = icosphere(4);
-        let seeds: Vec<u32> = (0..162).collect();
-        let dual = nearest_seed_dual_triangles(&fine, &seeds).unwrap();
-        let corners: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
-        let mesh = TriMesh::new(corners, dual).unwrap();
-        assert!(is_edge_manifold(&mesh));
-        assert_eq!(mesh.face_count(), 320);
-        assert!(is_watertight(&mesh));
-        assert!(nearest_seed_regions(&fine, &[3, 3]).is_err());
-        assert!(nearest_seed_regions(&fine, &[99_999]).is_err());
-    }
-
-    #[test]
     fn bad_seeds_are_errors_and_unreached_vertices_have_no_region() {
         let sphere = icosphere(1);
         assert!(geodesic_voronoi_regions(&sphere, &[0, 0]).is_err());
         assert!(geodesic_voronoi_regions(&sphere, &[42]).is_err());
+        assert!(nearest_seed_regions(&sphere, &[3, 3]).is_err());
+        assert!(nearest_seed_regions(&sphere, &[42]).is_err());
         let mut v = sphere.vertices().to_vec();
         v.push([5.0, 0.0, 0.0]);
         let lonely = TriMesh::new(v, sphere.triangles().to_vec()).unwrap();
