@@ -167,7 +167,7 @@ mod tests {
         let mesh = meshgnn_geometry::icosphere(1); // 42 vertices
         let adjacency = vertex_adjacency(&mesh).unwrap();
         let points = mesh.vertices().to_vec();
-        let graph = ExtendedGraph::new(&points, &adjacency, sampled, 4, &Device::Cpu).unwrap();
+        let graph = ExtendedGraph::new(&points, &adjacency, sampled, 4, &[], &Device::Cpu).unwrap();
         (points, adjacency, graph)
     }
 
@@ -291,8 +291,34 @@ mod tests {
             &vertex_adjacency(&meshgnn_geometry::icosphere(1)).unwrap(),
             &[3, 3],
             4,
+            &[],
             &Device::Cpu,
         );
         assert!(repeated.is_err());
+    }
+
+    #[test]
+    fn dual_triangles_link_their_corners() {
+        let mesh = meshgnn_geometry::icosphere(1);
+        let adjacency = vertex_adjacency(&mesh).unwrap();
+        let sampled = [0, 5, 41];
+        let graph = |dual: &[[u32; 3]]| {
+            ExtendedGraph::new(mesh.vertices(), &adjacency, &sampled, 0, dual, &Device::Cpu)
+        };
+        // Without k-NN links the three far-apart vertices share no edge ...
+        assert!(graph(&[]).unwrap().pairs().is_empty());
+        // ... and a dual triangle over them links all three, both ways.
+        let linked = graph(&[[0, 1, 2]]).unwrap();
+        assert_eq!(
+            linked.pairs(),
+            &[[0, 1], [0, 2], [1, 0], [1, 2], [2, 0], [2, 1]]
+        );
+        // Its edges are candidates even when no A_s entry is among the strongest (k = 0).
+        let pattern = linked.strongest_pattern(&[0.0; 6], 0).unwrap();
+        assert_eq!(
+            meshgnn_graph::candidate_triangles(&pattern).unwrap(),
+            vec![[0, 1, 2]]
+        );
+        assert!(graph(&[[0, 1, 3]]).is_err());
     }
 }

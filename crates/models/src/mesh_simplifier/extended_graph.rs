@@ -1,6 +1,8 @@
 //! The graph the edge predictor works on (thesis ch. 6.3.2): the mesh adjacency extended by a
 //! k-NN graph over the sampled vertices (k = 15, ch. 6.4) so that no sampled vertex is
-//! isolated, and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) with the structure its
+//! isolated and, beyond the thesis, by the edges of the sampled vertices' nearest-seed dual
+//! (so that every dual triangle can become a candidate: with the k-NN alone 1-3% of them had
+//! an edge outside the graph on the test families), and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) with the structure its
 //! terms are walked from in every pass ([`super::simplified_adjacency`]).
 //!
 //! # Conventions
@@ -47,6 +49,8 @@ pub struct ExtendedGraph {
     /// What the terms of eq. 6.4 on `pairs` are walked from.
     pattern: Arc<SimplifiedAdjacencyPattern>,
     sampled: Vec<u32>,
+    /// The dual's edges `(a, b)`, `a < b`, in sampled-vertex numbering: always candidates.
+    dual_edges: Vec<(u32, u32)>,
 }
 
 /// Logit added to empty attention slots: its softmax weight underflows to exactly 0.
@@ -55,12 +59,14 @@ const EMPTY_SLOT_LOGIT: f32 = -1e30;
 impl ExtendedGraph {
     /// The graph of `points: #N×3` with mesh `adjacency: #N×#N` (or an empty matrix for a
     /// point cloud) extended by the `k` nearest sampled vertices of every sampled vertex
-    /// (`sampled`: distinct indices `< N`).
+    /// (`sampled`: distinct indices `< N`) and by the edges of `dual` (triangles in
+    /// sampled-vertex numbering, [`meshgnn_geometry::nearest_seed_dual_triangles`]).
     pub fn new(
         points: &[[f32; 3]],
         adjacency: &CsrMatrix,
         sampled: &[u32],
         k: usize,
+        dual: &[[u32; 3]],
         device: &Device,
     ) -> Result<Self> {
         let n = points.len();
@@ -101,6 +107,23 @@ impl ExtendedGraph {
                     let j = sampled[b as usize];
                     rows[i as usize].push(j);
                     rows[j as usize].push(i);
+                }
+            }
+        }
+        let mut dual_edges = Vec::with_capacity(3 * dual.len());
+        for &[a, b, c] in dual {
+            for (u, v) in [(a, b), (b, c), (c, a)] {
+                let (Some(&i), Some(&j)) = (sampled.get(u as usize), sampled.get(v as usize))
+                else {
+                    return Err(Error::Invalid {
+                        what: format!("dual triangle [{a}, {b}, {c}]"),
+                        reason: format!("corner outside the {} sampled vertices", sampled.len()),
+                    });
+                };
+                if i != j {
+                    rows[i as usize].push(j);
+                    rows[j as usize].push(i);
+                    dual_edges.push((u.min(v), u.max(v)));
                 }
             }
         }
@@ -157,6 +180,7 @@ impl ExtendedGraph {
             pairs,
             pattern: Arc::new(pattern),
             sampled: sampled.to_vec(),
+            dual_edges,
         })
     }
 
@@ -183,8 +207,10 @@ impl ExtendedGraph {
     }
 
     /// The strongest entries of `A_s`: for every sampled vertex its `k` largest `values` (on
-    /// [`Self::pairs`], ties by index), symmetrised by union, as an `M×M` pattern of ones (for
-    /// [`meshgnn_graph::candidate_triangles`]).
+    /// [`Self::pairs`], ties by index), and the dual's edges, symmetrised by union, as an
+    /// `M×M` pattern of ones (for [`meshgnn_graph::candidate_triangles`]; with the dual's
+    /// edges every dual triangle is a candidate, also where a sampled vertex of a small mesh
+    /// has more than `k` strong links).
     pub fn strongest_pattern(&self, values: &[f32], k: usize) -> Result<CsrMatrix> {
         let mut kept: Vec<(u32, u32, f32)> = Vec::new();
         let mut start = 0;
@@ -199,6 +225,10 @@ impl ExtendedGraph {
                 kept.push((b, a, 1.0));
             }
             start = end;
+        }
+        for &(a, b) in &self.dual_edges {
+            kept.push((a, b, 1.0));
+            kept.push((b, a, 1.0));
         }
         kept.sort_by_key(|t| (t.0, t.1));
         kept.dedup_by_key(|t| (t.0, t.1));

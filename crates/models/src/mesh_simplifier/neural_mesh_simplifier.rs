@@ -215,18 +215,19 @@ impl NeuralMeshSimplifier {
             seed,
         )?;
         progress(0.05);
+        let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
         let graph = ExtendedGraph::new(
             input.surface.vertices(),
             &input.adjacency,
             &sampled.indices,
             self.config.edges.neighbours,
+            &dual,
             &self.device,
         )?;
         progress(0.2);
         let prediction = self.edges.forward(&input.tensor, &graph)?;
         let candidates = prediction.candidate_faces(&graph)?;
         progress(0.3);
-        let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
         let corners: Vec<[f32; 3]> = sampled
             .indices
             .iter()
