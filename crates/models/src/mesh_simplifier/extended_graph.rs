@@ -1,9 +1,10 @@
 //! The graph the edge predictor works on (thesis ch. 6.3.2): the mesh adjacency extended by a
 //! k-NN graph over the sampled vertices (k = 15, ch. 6.4) so that no sampled vertex is
-//! isolated and, beyond the thesis, by the edges of the sampled vertices' nearest-seed dual
-//! (so that every dual triangle can become a candidate: with the k-NN alone 1-3% of them had
-//! an edge outside the graph on the test families), and the sparsity pattern of `A_s = Ŝᵀ A Ŝ` (eq. 6.3-6.4) with the structure its
-//! terms are walked from in every pass ([`super::simplified_adjacency`]).
+//! isolated and, beyond the thesis, by the edges of the sampled vertices' nearest-seed dual (so
+//! that every dual triangle can become a candidate: with the k-NN alone 1-3% of them had an
+//! edge outside the graph on the test families), and the sparsity pattern of `A_s = Ŝᵀ A Ŝ`
+//! (eq. 6.3-6.4) with the structure its terms are walked from in every pass
+//! ([`super::simplified_adjacency`]).
 //!
 //! # Conventions
 //! - `A` in eq. 6.4 is the *extended* adjacency with self-loops (`A_ext + I`): with the
@@ -17,7 +18,7 @@
 //! - `A_s` is stored as its non-zero pattern `pairs` (`(a, b)` in sampled-vertex numbering,
 //!   `a ≠ b`, sorted).
 //! - Beyond the thesis, `A_s` is evaluated only on pairs of sampled vertices that are linked
-//!   in the extended graph (a mesh edge or a k-NN link between them). The full product links
+//!   in the extended graph (a mesh edge, a k-NN link or a dual edge between them). The full product links
 //!   two sampled vertices whenever some mesh edge joins two vertices attending to them: on
 //!   icosphere(3) with 120 of 642 vertices sampled it filled 74% of all pairs (10 612) and gave
 //!   120 050 candidate triangles for 120 vertices (measured), far beyond what a face classifier
