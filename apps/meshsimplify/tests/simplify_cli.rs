@@ -210,7 +210,7 @@ fn kept_vertices_stay_where_they_are_and_bad_lists_are_refused() {
 }
 
 #[test]
-fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_watertightness() {
+fn the_neural_method_keeps_about_the_target_vertices_edge_manifold_and_reports_watertightness() {
     let dir = tempfile::tempdir().unwrap();
     let input = sphere_file(dir.path());
     let run = |name: &str, extra: &[&str]| {
@@ -242,7 +242,9 @@ fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_waterti
     let (summary, mesh, bytes) = run("a.ply", &[]);
     // 10 % of the 2 562 vertices, placed off the input's vertices (each at its region's
     // quadric optimum); with --keep-positions every one at an input vertex, the same faces.
-    assert_eq!(mesh.vertex_count(), 256);
+    // Vertices cut off from their nearest drawn vertex get seeds of their own and the draw
+    // shrinks by as many, so the count is near the target, not on it: 255 for seed 3.
+    assert_eq!(mesh.vertex_count(), 255);
     let input_vertices: std::collections::HashSet<[u32; 3]> = read_mesh(&input)
         .unwrap()
         .vertices()
@@ -255,7 +257,7 @@ fn the_neural_method_keeps_the_target_vertices_edge_manifold_and_reports_waterti
     };
     let (_, selected, _) = run("d.ply", &["--keep-positions"]);
     assert_eq!(selected.triangles(), mesh.triangles());
-    assert_eq!(at_input(&selected), 256);
+    assert_eq!(at_input(&selected), 255);
     assert!(
         at_input(&mesh) < 26,
         "{} placed vertices at input ones",

@@ -15,13 +15,16 @@
 //! facing the same side. Its dual is decided by the seeds' positions and normals alone, up to
 //! the input's resolution, where the geodesic partition's dual also depends on the paths along
 //! the input's edges: where four seeds are nearly cocircular the two pick different diagonals
-//! (docs/mesh_simplifier_model.md).
+//! (docs/mesh_simplifier_model.md). Its dual is taken over the partition made connected
+//! (`connected_regions`): a region's piece cut off from its seed would put a dual edge into
+//! faces on both sides of it.
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 
 use rayon::prelude::*;
 
+use crate::connected_regions::connected_nearest_seed_regions;
 use crate::error::{Error, Result};
 use crate::spatial_index::SpatialIndex;
 use crate::tri_mesh::TriMesh;
@@ -107,18 +110,24 @@ pub fn nearest_seed_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     Ok(v.par_iter()
         .zip(&normals)
         .map_init(Vec::new, |out, (p, n)| {
-            index.nearest(p, FACING_CANDIDATES, None, out);
             let n = to_f64(*n);
-            let facing = out
-                .iter()
-                .find(|&&(_, s)| dot(n, seed_normals[s as usize]) > 0.0);
+            let faces_n = |&&(_, s): &&(f32, u32)| dot(n, seed_normals[s as usize]) > 0.0;
+            // The nearest seed alone first: it faces the vertex's way almost everywhere, and
+            // the candidates come in (distance, index) order, so it is their first.
+            index.nearest(p, 1, None, out);
+            if out.first().is_some_and(|nearest| faces_n(&nearest)) {
+                return out[0].1;
+            }
+            index.nearest(p, FACING_CANDIDATES, None, out);
+            let facing = out.iter().find(faces_n);
             facing.or(out.first()).map_or(u32::MAX, |&(_, s)| s)
         })
         .collect())
 }
 
-/// The dual triangles of [`nearest_seed_regions`], as [`voronoi_dual_triangles`] gives those
-/// of the geodesic partition.
+/// The dual triangles of [`connected_nearest_seed_regions`] (the nearest-seed partition with
+/// the pieces cut off from their seed handed to a neighbour), as [`voronoi_dual_triangles`]
+/// gives those of the geodesic partition.
 ///
 /// ```
 /// use meshgnn_geometry::{icosphere, nearest_seed_dual_triangles};
@@ -128,7 +137,10 @@ pub fn nearest_seed_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn nearest_seed_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32; 3]>> {
-    Ok(dual_triangles(mesh, &nearest_seed_regions(mesh, seeds)?))
+    Ok(dual_triangles(
+        mesh,
+        &connected_nearest_seed_regions(mesh, seeds)?,
+    ))
 }
 
 /// `u32::MAX` everywhere but at the seeds, which hold their index; errors when a seed is out

@@ -18,6 +18,7 @@ mod face_classifier;
 mod face_graph;
 mod flat_rows;
 mod incoming_links;
+mod island_seeded_draw;
 mod linear_relu;
 mod link_message_mean;
 mod neighbour_deviation_maximum;
@@ -39,6 +40,7 @@ pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePred
 pub use extended_graph::ExtendedGraph;
 pub use face_classifier::{FaceClassifier, FaceClassifierConfig};
 pub use face_graph::FaceGraph;
+pub use island_seeded_draw::{ISLAND_FRACTION, with_island_seeds};
 pub use linear_relu::linear_relu;
 pub use link_message_mean::link_message_mean;
 pub use neighbour_deviation_maximum::neighbour_deviation_maximum;

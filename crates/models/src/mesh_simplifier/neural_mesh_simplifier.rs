@@ -1,5 +1,7 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
-//! `M` vertices, the edge predictor connects them (`A_s`) and proposes candidate triangles, the
+//! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
+//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]), the edge
+//! predictor connects them (`A_s`) and proposes candidate triangles, the
 //! face classifier scores each. [`NeuralMeshSimplifier::forward`] returns everything the
 //! eq. 6.14 loss needs; [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5`
 //! (ch. 6.4), makes them edge-manifold, each facing along the input's normals
@@ -13,7 +15,7 @@
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
 //!   before the network sees it; outputs are in the input's units.
-//! - The simplified mesh keeps all `M` sampled vertices in draw order (a vertex no kept face
+//! - The simplified mesh keeps all sampled vertices (about `M`) in draw order (a vertex no kept face
 //!   uses stays, isolated): at their input positions with `keep_positions`, else placed.
 
 use candle_core::{Device, Tensor};
@@ -31,7 +33,7 @@ use meshgnn_losses::metrics::watertightness;
 use super::{
     CandidateFaces, EdgePredictor, EdgePredictorConfig, ExtendedGraph, FaceClassifier,
     FaceClassifierConfig, FaceGraph, NeighbourSlots, PointSampler, PointSamplerConfig,
-    SampledPoints,
+    SampledPoints, with_island_seeds,
 };
 use crate::{Error, Result};
 
@@ -192,8 +194,8 @@ impl NeuralMeshSimplifier {
         &self.device
     }
 
-    /// Eq. 6.1-6.7: samples `target` vertices of `input` (seeded) and scores the candidate
-    /// triangles among them.
+    /// Eq. 6.1-6.7: samples about `target` vertices of `input` (seeded; island seeds
+    /// included) and scores the candidate triangles among them.
     pub fn forward(&self, input: &MeshInput, target: usize, seed: u64) -> Result<SimplifierPass> {
         self.forward_with_progress(input, target, seed, &mut |_| {})
     }
@@ -207,13 +209,14 @@ impl NeuralMeshSimplifier {
         seed: u64,
         progress: &mut dyn FnMut(f64),
     ) -> Result<SimplifierPass> {
-        let sampled = self.sampler.sample(
+        let drawn = self.sampler.sample(
             &input.tensor,
             input.surface.vertices(),
             &input.slots,
             target,
             seed,
         )?;
+        let sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
         progress(0.05);
         let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
         let graph = ExtendedGraph::new(
@@ -336,7 +339,7 @@ impl NeuralMeshSimplifier {
         self.simplify_with_progress(mesh, target.vertex_count(mesh), seed, options, progress)
     }
 
-    /// Simplifies `mesh` to `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
+    /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
     /// then the manifold pass (module docs), the vertices placed unless
     /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
     /// closed with rejected candidates and every hole of at most `k` edges filled.
