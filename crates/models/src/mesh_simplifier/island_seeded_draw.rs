@@ -15,10 +15,12 @@ use crate::Result;
 /// seeds").
 pub const ISLAND_FRACTION: usize = 8;
 
-/// `sampled`, a draw of `target` of `surface`'s vertices, with the island seeds of its
-/// pieces appended; when there are `k` of them (fewer than `target`), the draw is first
-/// repeated for `target − k` vertices with the same probabilities and seed, and that draw's
-/// island seeds are appended instead. The probabilities are kept.
+/// `sampled`, a draw of `target` of `surface`'s vertices, refined: when its pieces call for
+/// `k > 0` island seeds, the draw is repeated for `max(target − k, target / 2)` vertices with
+/// the same probabilities and seed, and that draw's island seeds are appended to it (the
+/// floor keeps a mesh of more components and cut-off pieces than its target from losing most
+/// of its draw). With no island seed the draw comes back as it was. The probabilities are
+/// kept.
 pub fn with_island_seeds(
     sampled: SampledPoints,
     surface: &TriMesh,
@@ -26,17 +28,14 @@ pub fn with_island_seeds(
     seed: u64,
 ) -> Result<SampledPoints> {
     let min_vertices = (surface.vertex_count() / (target.max(1) * ISLAND_FRACTION)).max(1);
-    let refined = island_seeds(surface, &sampled.indices, min_vertices)?;
-    let extra = refined.len() - sampled.indices.len();
-    if extra == 0 || extra >= target {
-        return Ok(SampledPoints {
-            indices: refined,
-            ..sampled
-        });
+    let extra =
+        island_seeds(surface, &sampled.indices, min_vertices)?.len() - sampled.indices.len();
+    if extra == 0 {
+        return Ok(sampled);
     }
+    let redrawn = target.saturating_sub(extra).max(target / 2).max(1);
     let weights: Vec<f32> = sampled.probabilities.detach().to_vec1()?;
-    let fewer =
-        meshgnn_graph::balanced_sampling(surface.vertices(), &weights, target - extra, seed)?;
+    let fewer = meshgnn_graph::balanced_sampling(surface.vertices(), &weights, redrawn, seed)?;
     Ok(SampledPoints {
         indices: island_seeds(surface, &fewer, min_vertices)?,
         ..sampled
@@ -84,7 +83,9 @@ mod tests {
         sorted.sort_unstable();
         assert_eq!(sorted, vec![a, b, centre]);
         assert_eq!(refined.indices[2], centre);
-        // As many island seeds as the target: the draw is kept, the seed added above it.
+        // As many island seeds as the target: the draw is repeated for half the target (at
+        // least one vertex), here (0, 0) again, the heavy one, and the seed added above it.
+        weights[b as usize] = 1e-6;
         let refined = with_island_seeds(drawn(vec![a], &weights), &squares, 1, 0).unwrap();
         assert_eq!(refined.indices, vec![a, centre]);
         // Nothing cut off: the draw as it was.
