@@ -1,10 +1,10 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
 //! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]), the edge
-//! predictor connects them (`A_s`) and proposes candidate triangles, the
-//! face classifier scores each. [`NeuralMeshSimplifier::forward`] returns everything the
-//! eq. 6.14 loss needs; [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5`
-//! (ch. 6.4), makes them edge-manifold, each facing along the input's normals
+//! predictor connects them (`A_s`) and proposes candidate triangles, the face classifier
+//! scores each. [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
+//! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
+//! edge-manifold, each facing along the input's normals
 //! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the holes left: first
 //! the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then every
 //! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond the
@@ -15,8 +15,9 @@
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
 //!   before the network sees it; outputs are in the input's units.
-//! - The simplified mesh keeps all sampled vertices (about `M`) in draw order (a vertex no kept face
-//!   uses stays, isolated): at their input positions with `keep_positions`, else placed.
+//! - The simplified mesh keeps all sampled vertices (about `M`) in draw order (a vertex no
+//!   kept face uses stays, isolated): at their input positions with `keep_positions`, else
+//!   placed.
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;

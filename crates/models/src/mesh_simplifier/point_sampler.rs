@@ -40,8 +40,9 @@ impl Default for PointSamplerConfig {
 /// The sampled vertices of one forward pass.
 #[derive(Clone, Debug)]
 pub struct SampledPoints {
-    /// Indices of the `M` drawn vertices, distinct, in draw order (on a mesh, followed by
-    /// the island seeds of [`super::with_island_seeds`]).
+    /// Indices of the `M` drawn vertices, distinct, in draw order (in the mesh simplifier,
+    /// about `M`: a draw shortened by the island seeds it is then followed by,
+    /// [`super::with_island_seeds`]).
     pub indices: Vec<u32>,
     /// Inclusion probability of every vertex, `(N)`, attached to the autograd graph.
     pub probabilities: Tensor,
