@@ -17,6 +17,7 @@ use petgraph::unionfind::UnionFind;
 use crate::error::Result;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{norm, sub, to_f64};
+use crate::vertex_neighbours::VertexNeighbours;
 use crate::voronoi_dual::nearest_seed_regions;
 
 /// The seeds followed by one more seed for every piece of their [`nearest_seed_regions`]
@@ -138,43 +139,6 @@ impl RegionPieces {
     /// and pieces never span two regions, so any seed in the piece is its region's).
     fn holds_its_seed(&self, i: usize) -> bool {
         self.holds_seed[self.root[i] as usize]
-    }
-}
-
-/// Each vertex's neighbours along mesh edges, in compressed rows (an edge of two faces is
-/// listed twice; the breadth-first walk does not mind).
-struct VertexNeighbours {
-    start: Vec<usize>,
-    list: Vec<u32>,
-}
-
-impl VertexNeighbours {
-    fn new(mesh: &TriMesh) -> Self {
-        let mut start = vec![0usize; mesh.vertex_count() + 1];
-        for t in mesh.triangles() {
-            for &c in t {
-                start[c as usize + 1] += 2;
-            }
-        }
-        for i in 1..start.len() {
-            start[i] += start[i - 1];
-        }
-        let mut fill = start.clone();
-        let mut list = vec![0u32; start[start.len() - 1]];
-        for t in mesh.triangles() {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                for (from, to) in [(a, b), (b, a)] {
-                    list[fill[from as usize]] = to;
-                    fill[from as usize] += 1;
-                }
-            }
-        }
-        Self { start, list }
-    }
-
-    fn of(&self, v: u32) -> &[u32] {
-        &self.list[self.start[v as usize]..self.start[v as usize + 1]]
     }
 }
 

@@ -52,6 +52,7 @@ mod spatial_index;
 mod surface_sampling;
 mod symmetric_eigen3;
 mod tangent_chart_triangulation;
+mod vertex_neighbours;
 mod vertex_normals;
 mod voronoi_dual;
 mod watertight;

@@ -29,6 +29,7 @@ use crate::error::{Error, Result};
 use crate::spatial_index::SpatialIndex;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{dot, norm, sub, to_f64};
+use crate::vertex_neighbours::VertexNeighbours;
 use crate::vertex_normals::vertex_normals;
 
 /// The region (index into `seeds`) of every vertex; `u32::MAX` for vertices no seed reaches.
@@ -36,14 +37,7 @@ use crate::vertex_normals::vertex_normals;
 pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     let n = mesh.vertex_count();
     let mut region = seed_regions(n, seeds)?;
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            neighbours[a as usize].push(b);
-            neighbours[b as usize].push(a);
-        }
-    }
+    let neighbours = VertexNeighbours::new(mesh);
     let v = mesh.vertices();
     let mut distance = vec![f64::INFINITY; n];
     // Keys are (distance bits, seed): non-negative f64 order as their bit patterns, and the
@@ -58,7 +52,7 @@ pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
         if d > distance[u as usize] || region[u as usize] != s {
             continue;
         }
-        for &w in &neighbours[u as usize] {
+        for &w in neighbours.of(u) {
             let step = norm(sub(to_f64(v[w as usize]), to_f64(v[u as usize])));
             let candidate = d + step;
             let better = candidate < distance[w as usize]
