@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use meshgnn_data::Expression;
+use meshgnn_geometry::stdout_line;
 use meshgnn_models::expression::{ExpressionEvaluation, evaluate_expressions};
 use serde_json::{Map, Value, json};
 
@@ -57,7 +58,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let ours = evaluate_expressions(&generator, &folder.sequences)?;
     let theirs = evaluate_expressions(&baseline, &folder.sequences)?;
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({
                 "per_expression_mm": per_expression(&ours),
@@ -74,26 +75,28 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         );
         return Ok(());
     }
-    println!(
+    stdout_line!(
         "Table 4.2 on {} test subjects ({} sequences, {} frames): mean per-vertex error (mm)",
-        folder.subjects, ours.sequences, ours.frames
+        folder.subjects,
+        ours.sequences,
+        ours.frames
     );
     let names: Vec<&str> = Expression::ALL.iter().map(|e| e.name()).collect();
-    println!("| model | {} | total | jitter |", names.join(" | "));
-    println!("|---|{}---:|---:|", "---:|".repeat(6));
+    stdout_line!("| model | {} | total | jitter |", names.join(" | "));
+    stdout_line!("|---|{}---:|---:|", "---:|".repeat(6));
     for (name, e) in [("blendshape", &theirs), ("generator", &ours)] {
         let cells: Vec<String> = e
             .per_expression_mm
             .iter()
             .map(|v| v.map_or("-".into(), |v| format!("{v:.3}")))
             .collect();
-        println!(
+        stdout_line!(
             "| {name} | {} | {:.3} | {:.4} |",
             cells.join(" | "),
             e.total_mm,
             e.jitter_mm
         );
     }
-    println!("ground-truth jitter {:.4} mm", ours.truth_jitter_mm);
+    stdout_line!("ground-truth jitter {:.4} mm", ours.truth_jitter_mm);
     Ok(())
 }

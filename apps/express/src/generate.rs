@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use meshgnn_data::{SequenceTiming, View, contact_sheet, write_png};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
     MorphAnimation, OutputGuard, TriMesh, read_mesh, write_mesh, write_morph_animation,
 };
@@ -164,7 +165,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
         write_png(p, &contact_sheet(&picks, 4, 256, view)?)?;
     }
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({"frames": frames.len(), "fps": args.fps, "seconds": seconds, "files": files,
                    "preview": args.preview.as_ref().map(|p| p.display().to_string())})

@@ -10,6 +10,7 @@ use anyhow::{Result, bail};
 use candle_core::Device;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, check_count};
 use meshgnn_models::expression::{
     DecoderKind, ExpressionGeneratorConfig, ExpressionModel, ExpressionTraining,
@@ -205,7 +206,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         run.seconds
     );
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({
                 "output": args.output.display().to_string(),

@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{MAX_SURFACE_SAMPLES, check_count};
 use meshgnn_losses::metrics::ErrorSummary;
 use meshgnn_models::handy::{
@@ -214,55 +215,64 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "seconds": started.elapsed().as_secs_f64(),
     });
     if args.json {
-        println!("{report}");
+        stdout_line!("{report}");
         return Ok(());
     }
-    println!("Generalisation: mean per-vertex error (mm), mean ± std over meshes");
-    println!(
+    stdout_line!("Generalisation: mean per-vertex error (mm), mean ± std over meshes");
+    stdout_line!(
         "| model | test ({}) | children ({}) |",
         test.len(),
         children.as_ref().map_or(0, Vec::len)
     );
-    println!("|---|---:|---:|");
+    stdout_line!("|---|---:|---:|");
     let fmt = |e: Option<&ErrorSummary>| {
         e.map_or("-".into(), |e| format!("{:.3} ± {:.3}", e.mean, e.std))
     };
-    println!(
+    stdout_line!(
         "| Handy (PCA, n_c = {z}) | {} | {} |",
         fmt(Some(&pca_test)),
         fmt(pca_children.as_ref())
     );
-    println!(
+    stdout_line!(
         "| Handy++ (n_z = {z}) | {} | {} |",
         fmt(Some(&ae_test)),
         fmt(ae_children.as_ref())
     );
-    println!();
-    println!(
+    stdout_line!();
+    stdout_line!(
         "Specificity ({} samples, mm): PCA {:.3} ± {:.3}, Handy++ {:.3} ± {:.3}",
-        args.samples, pca_spec.mean, pca_spec.std, ae_spec.mean, ae_spec.std
+        args.samples,
+        pca_spec.mean,
+        pca_spec.std,
+        ae_spec.mean,
+        ae_spec.std
     );
     if let Some(c) = at(z) {
-        println!(
+        stdout_line!(
             "Compactness: {z} PCA components explain {:.2} % of the training variance",
             100.0 * c
         );
     }
     if let Some((a, p, pts)) = fit_rows {
-        println!();
-        println!(
+        stdout_line!();
+        stdout_line!(
             "Fitting {count} partial scans (camera {:?}, ~{pts:.0} points, noise {} mm), mm:",
-            args.camera, args.scan_noise
+            args.camera,
+            args.scan_noise
         );
-        println!("| model | R2S | S2R | per-vertex |");
-        println!("|---|---:|---:|---:|");
-        println!(
+        stdout_line!("| model | R2S | S2R | per-vertex |");
+        stdout_line!("|---|---:|---:|---:|");
+        stdout_line!(
             "| Handy (PCA, n_c = {z}) | {:.3} | {:.3} | {:.3} |",
-            p.r2s, p.s2r, p.vertex
+            p.r2s,
+            p.s2r,
+            p.vertex
         );
-        println!(
+        stdout_line!(
             "| Handy++ (n_z = {z}) | {:.3} | {:.3} | {:.3} |",
-            a.r2s, a.s2r, a.vertex
+            a.r2s,
+            a.s2r,
+            a.vertex
         );
     }
     eprintln!("evaluated in {:.0} s", started.elapsed().as_secs_f64());

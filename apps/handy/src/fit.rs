@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use meshgnn_data::{View, points_on_mesh_sheet, write_png};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
     OutputGuard, TriMesh, bounding_box_diagonal, check_count, read_input_point_cloud, write_mesh,
 };
@@ -122,7 +123,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
     // The scan's own size: R2S and S2R relative to it compare scans in any unit.
     let diagonal = bounding_box_diagonal(scan.points());
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({
                 "r2s_mm": fit.distances.r2s,
@@ -141,7 +142,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
             })
         );
     } else {
-        println!(
+        stdout_line!(
             "R2S {:.3} mm  S2R {:.3} mm  ({} scan points, scale {:.4}, rotation {:.2}°) → {}",
             fit.distances.r2s,
             fit.distances.s2r,

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_mesh};
 use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, check_registered, interpolate_shapes};
 use serde_json::json;
@@ -62,7 +63,7 @@ pub fn run(args: &InterpolateArgs) -> Result<()> {
         shapes,
     )?;
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({"steps": args.steps, "files": files, "contact_sheet": sheet.display().to_string()})
         );

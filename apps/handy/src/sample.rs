@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, check_count};
 use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, decode_latents};
 use serde_json::json;
@@ -58,7 +59,7 @@ pub fn run(args: &SampleArgs) -> Result<()> {
         shapes,
     )?;
     if args.json {
-        println!(
+        stdout_line!(
             "{}",
             json!({"count": args.count, "seed": args.seed, "files": files, "contact_sheet": sheet.display().to_string(), "latents": latents})
         );

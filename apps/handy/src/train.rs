@@ -8,6 +8,7 @@ use anyhow::{Context, Result};
 use candle_core::Device;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, check_count};
 use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralTraining};
 use meshgnn_models::training::{self, TrainingConfig};
@@ -225,7 +226,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         "output": args.output.display().to_string(),
     });
     if args.json {
-        println!("{summary}");
+        stdout_line!("{summary}");
     } else {
         eprintln!(
             "done in {:.0} s: train {train_mm:.3} mm, validation {} mm → {}",

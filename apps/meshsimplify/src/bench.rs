@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{InputUse, OutputGuard, atomic_write, mesh_files_in, read_input_mesh};
 use meshgnn_graph::Target;
 use meshgnn_losses::metrics::{
@@ -184,9 +185,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if args.json {
-        println!("{report}");
+        stdout_line!("{report}");
     } else {
-        print!("{}", to_markdown(args, &names, &rows, &skipped));
+        meshgnn_geometry::print_stdout(format_args!(
+            "{}",
+            to_markdown(args, &names, &rows, &skipped)
+        ));
     }
     Ok(())
 }

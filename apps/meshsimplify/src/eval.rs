@@ -12,6 +12,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{InputUse, check_count, read_input_mesh};
 use meshgnn_losses::metrics::{
     MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation,
@@ -59,15 +60,15 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             )
         })?;
     if args.json {
-        println!("{}", to_json(&e));
+        stdout_line!("{}", to_json(&e));
     } else {
-        println!("CD         {:.6e}  (squared unit-sphere units)", e.cd);
-        println!("Hausdorff  {:.6e}  (unit-sphere units)", e.hausdorff);
-        println!("NE         {:.6}", e.ne);
-        println!("WA         {:.3} %", e.wa);
-        println!("LE         {:.6}", e.le);
-        println!("holes      {}", e.holes);
-        println!("manifold   {}", e.edge_manifold);
+        stdout_line!("CD         {:.6e}  (squared unit-sphere units)", e.cd);
+        stdout_line!("Hausdorff  {:.6e}  (unit-sphere units)", e.hausdorff);
+        stdout_line!("NE         {:.6}", e.ne);
+        stdout_line!("WA         {:.3} %", e.wa);
+        stdout_line!("LE         {:.6}", e.le);
+        stdout_line!("holes      {}", e.holes);
+        stdout_line!("manifold   {}", e.edge_manifold);
     }
     Ok(())
 }

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, bail};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{InputUse, MeshReport, mesh_files_in, mesh_report, read_input_mesh};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -48,7 +49,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             }
         }
         if args.json {
-            println!("{}", Value::Array(reports));
+            stdout_line!("{}", Value::Array(reports));
         } else {
             reports.iter().for_each(print_text);
         }
@@ -62,7 +63,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     } else {
         let report = inspect(&args.path)?;
         if args.json {
-            println!("{report}");
+            stdout_line!("{report}");
         } else {
             print_text(&report);
         }
@@ -102,7 +103,7 @@ fn to_json(file: &Path, r: &MeshReport, load_seconds: f64) -> Value {
 
 fn print_text(report: &Value) {
     let field = |key: &str| report.get(key).cloned().unwrap_or(Value::Null);
-    println!("{}", field("file").as_str().unwrap_or_default());
+    stdout_line!("{}", field("file").as_str().unwrap_or_default());
     for key in [
         "vertices",
         "faces",
@@ -119,8 +120,8 @@ fn print_text(report: &Value) {
         "duplicate_faces",
         "non_manifold_edges",
     ] {
-        println!("  {key:<19}{}", field(key));
+        stdout_line!("  {key:<19}{}", field(key));
     }
     let seconds = field("load_seconds").as_f64().unwrap_or_default();
-    println!("  {:<19}{:.3} s", "load_time", seconds);
+    stdout_line!("  {:<19}{:.3} s", "load_time", seconds);
 }

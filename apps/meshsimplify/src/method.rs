@@ -9,6 +9,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation, vertex_normals};
 use meshgnn_graph::{DecimationOptions, Target, decimate_keeping};
 use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
@@ -313,7 +314,7 @@ impl Outcome {
 
     /// Two lines of text for a person.
     pub fn print(&self, input: &Path, output: &Path) {
-        println!(
+        stdout_line!(
             "{}: {} faces, {} vertices -> {}: {} faces, {} vertices ({}{})",
             input.display(),
             self.input_faces,
@@ -325,14 +326,17 @@ impl Outcome {
             if self.welded { ", welded" } else { "" },
         );
         match (&self.watertightness, self.error) {
-            (Some(w), _) => println!(
+            (Some(w), _) => stdout_line!(
                 "WA {:.2}% raw, {:.2}% after the manifold pass, {} holes, {:.3} s",
-                w.wa_raw, w.wa, w.holes, self.seconds
+                w.wa_raw,
+                w.wa,
+                w.holes,
+                self.seconds
             ),
             (None, Some(error)) => {
-                println!("error {error:.3e} (input units), {:.3} s", self.seconds)
+                stdout_line!("error {error:.3e} (input units), {:.3} s", self.seconds)
             }
-            (None, None) => println!("{:.3} s", self.seconds),
+            (None, None) => stdout_line!("{:.3} s", self.seconds),
         }
     }
 }

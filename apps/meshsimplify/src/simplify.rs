@@ -37,6 +37,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshgnn_data::{View, contact_sheet, write_png};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
     InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, read_vertex_list, write_mesh,
 };
@@ -181,7 +182,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
     bar.finish_and_clear();
     let outcome = outcome?;
     if args.json {
-        println!("{}", outcome.to_json(None));
+        stdout_line!("{}", outcome.to_json(None));
     } else {
         outcome.print(&args.input, &args.output);
     }
@@ -265,14 +266,14 @@ fn run_folder(args: &SimplifyArgs, simplifier: &Simplifier) -> Result<()> {
     let mut failed = 0;
     for ((input, output), result) in files.iter().zip(&outputs).zip(results) {
         match (result, args.json) {
-            (Ok(outcome), true) => println!("{}", outcome.to_json(Some((input, output)))),
+            (Ok(outcome), true) => stdout_line!("{}", outcome.to_json(Some((input, output)))),
             (Ok(outcome), false) => outcome.print(input, output),
             (Err(error), json) => {
                 failed += 1;
                 let message = format!("{error:#}");
                 if json {
                     let line = json!({ "input": input.display().to_string(), "failure": message });
-                    println!("{line}");
+                    stdout_line!("{line}");
                 }
                 eprintln!("meshsimplify: {message}");
             }

@@ -81,3 +81,49 @@ fn a_malformed_file_fails_naming_file_and_problem() {
     assert!(stderr.contains("broken.off"), "{stderr}");
     assert!(Path::new(&file).exists(), "the input is untouched");
 }
+
+#[test]
+fn a_reader_that_has_gone_ends_the_run_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("octahedron.off");
+    std::fs::write(&file, OCTAHEDRON_OFF).unwrap();
+    // the read end closed before the run starts: its first line on stdout meets a broken pipe,
+    // as under `meshsimplify info F | head -0`
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_meshsimplify"))
+        .args(["info", file.to_str().unwrap()])
+        .stdout(writer)
+        .output()
+        .expect("the binary runs");
+    assert_eq!(
+        out.status.code(),
+        Some(meshgnn_geometry::BROKEN_PIPE_STATUS),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_full_disk_behind_stdout_is_one_line_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("octahedron.off");
+    std::fs::write(&file, OCTAHEDRON_OFF).unwrap();
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        return; // no /dev/full on this system
+    };
+    let out = Command::new(env!("CARGO_BIN_EXE_meshsimplify"))
+        .args(["info", file.to_str().unwrap()])
+        .stdout(full)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("writing to standard output"), "{stderr}");
+}

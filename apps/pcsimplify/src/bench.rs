@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use meshgnn_data::gaussian_noise;
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, atomic_write, mesh_files_in};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, TableColumn, comparison_table, point_cloud_evaluation,
@@ -156,9 +157,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if args.json {
-        println!("{report}");
+        stdout_line!("{report}");
     } else {
-        print!("{}", to_markdown(args, &names, &rows, &skipped));
+        meshgnn_geometry::print_stdout(format_args!(
+            "{}",
+            to_markdown(args, &names, &rows, &skipped)
+        ));
     }
     Ok(())
 }

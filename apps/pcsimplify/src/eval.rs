@@ -11,6 +11,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{check_count, read_input_point_cloud};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation,
@@ -62,14 +63,14 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         },
     )?;
     if args.json {
-        println!("{}", to_json(&e));
+        stdout_line!("{}", to_json(&e));
     } else {
-        println!("CD   {:.6e}  (squared unit-sphere units)", e.cd);
-        println!("NC   {:.6}", e.nc);
-        println!("CE   {:.6}", e.ce);
-        println!("RE   {:.6}", e.re);
-        println!("SDM  {:.6e}  (PC-MSDM)", e.sdm);
-        println!("SDM-nn {:.6}  (the earlier variant)", e.sdm_nearest);
+        stdout_line!("CD   {:.6e}  (squared unit-sphere units)", e.cd);
+        stdout_line!("NC   {:.6}", e.nc);
+        stdout_line!("CE   {:.6}", e.ce);
+        stdout_line!("RE   {:.6}", e.re);
+        stdout_line!("SDM  {:.6e}  (PC-MSDM)", e.sdm);
+        stdout_line!("SDM-nn {:.6}  (the earlier variant)", e.sdm_nearest);
     }
     Ok(())
 }

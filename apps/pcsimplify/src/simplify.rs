@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use meshgnn_data::{ColoredPoints, View, point_cloud_sheet, value_colors, write_png};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
     MeshFormat, OutputGuard, PointCloud, TangentChartOptions, TriMesh, curvature_features,
     mesh_report, tangent_chart_triangulation, write_mesh, write_point_cloud,
@@ -120,7 +121,7 @@ pub fn run(args: &SimplifyArgs) -> Result<()> {
         report["preview"] = json!(p.display().to_string());
     }
     if args.json {
-        println!("{report}");
+        stdout_line!("{report}");
     } else {
         print_text(&report, &selection, args.verbose);
     }
@@ -220,7 +221,7 @@ fn timings_json(selection: &Selection) -> Value {
 }
 
 fn print_text(report: &Value, selection: &Selection, verbose: bool) {
-    println!(
+    stdout_line!(
         "{}: kept {} of {} points ({:.2} %) with {} → {}",
         report["input"].as_str().unwrap_or_default(),
         report["kept_points"],
@@ -230,21 +231,24 @@ fn print_text(report: &Value, selection: &Selection, verbose: bool) {
         report["output"].as_str().unwrap_or_default(),
     );
     if let Some(t) = report.get("triangulation") {
-        println!(
+        stdout_line!(
             "triangulated: {} faces, {} holes, watertight {}, edge-manifold {}",
-            t["faces"], t["holes"], t["watertight"], t["edge_manifold"]
+            t["faces"],
+            t["holes"],
+            t["watertight"],
+            t["edge_manifold"]
         );
     }
     if verbose {
-        println!(
+        stdout_line!(
             "read      {:>9.4} s",
             report["read_seconds"].as_f64().unwrap_or_default()
         );
         for (stage, seconds) in &selection.timings {
-            println!("{stage:<9} {seconds:>9.4} s");
+            stdout_line!("{stage:<9} {seconds:>9.4} s");
         }
         if let Some(t) = report.get("triangulation") {
-            println!(
+            stdout_line!(
                 "triangulate {:>7.4} s",
                 t["seconds"].as_f64().unwrap_or_default()
             );

@@ -17,6 +17,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_data::{FolderDataset, gaussian_noise};
+use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{OutputGuard, check_count, sample_surface};
 use meshgnn_models::point_simplifier::{
     PointSimplifierConfig, SelectorSpace, SimplifierObjective, SimplifierTraining, TrainingSample,
@@ -252,7 +253,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             "the last epoch's weights".into()
         }
     };
-    println!(
+    stdout_line!(
         "wrote {} ({kept}) after {} epochs ({} steps), final mean loss {:.6}, {:.1} s",
         args.output.display(),
         run.state.epochs_completed,

@@ -97,7 +97,7 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<()> {
 /// start of `main`; a second call fails (the operating system keeps one handler).
 pub fn remove_temporaries_on_interrupt() -> std::io::Result<()> {
     ctrlc::set_handler(|| {
-        let removed = lock(&LIVE).interrupt();
+        let removed = remove_live_temporaries();
         match removed {
             0 => eprintln!("interrupted"),
             n => eprintln!("interrupted: removed {n} unfinished temporary file(s)"),
@@ -108,6 +108,12 @@ pub fn remove_temporaries_on_interrupt() -> std::io::Result<()> {
         ctrlc::Error::System(error) => error,
         other => std::io::Error::other(other),
     })
+}
+
+/// Removes this process's live temporary files and refuses new ones, for a process about to
+/// exit early; returns how many were removed.
+pub(crate) fn remove_live_temporaries() -> usize {
+    lock(&LIVE).interrupt()
 }
 
 /// `.NAME.tmp-PID-N`: hidden, beside the output, naming the process that owns it.
