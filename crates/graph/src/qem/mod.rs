@@ -1,8 +1,9 @@
 //! QEM edge-collapse decimation (Garland & Heckbert 1997) and what is built on it: the
 //! decimation itself ([`decimate`], algorithm and guarantees in `decimation.rs`), the plane
 //! quadrics it sums ([`Quadric`]), QEM vertex selection for point clouds on a mesh
-//! ([`qem_vertices`], thesis ch. 5.5) and the quadric placement of selected vertices
-//! ([`region_quadric_placement`], for the neural mesh simplifier of ch. 6). The other files
+//! ([`qem_vertices`], thesis ch. 5.5) and, for the neural mesh simplifier of ch. 6, the
+//! selected vertices moved to their regions' best-fitting vertex ([`region_quadric_vertices`])
+//! and placed at their quadric optimum ([`region_quadric_placement`]). The other files
 //! are the decimation's parts: welding, vertex records and collapses, edge placement,
 //! validity checks, candidate sorting, speculative parallel checks, memory warm-up and the
 //! changed-vertex sets.
@@ -25,5 +26,5 @@ pub use decimation::{
     decimate_with_progress,
 };
 pub use quadric::Quadric;
-pub use region_placement::region_quadric_placement;
+pub use region_placement::{region_quadric_placement, region_quadric_vertices};
 pub use vertex_selection::{QemVertices, qem_vertices};

@@ -5,7 +5,9 @@
 //! their representatives (Lindstrom, "Out-of-core simplification of large polygonal models",
 //! SIGGRAPH 2000; Valette et al.'s ACVD). A selection cannot put a vertex where the surface is
 //! best approximated (off the input's vertices, outside a convex bend, on a crease line
-//! between samples); this step can, while the faces stay as chosen.
+//! between samples); this step can, while the faces stay as chosen. Its discrete form,
+//! [`region_quadric_vertices`], moves each selected vertex to the input vertex of its region
+//! that fits the region's faces best, before the faces are chosen.
 //!
 //! # Conventions
 //! - The solve is regularised towards the selected position ([`Quadric::regularized_point`]):
@@ -69,7 +71,8 @@ pub fn region_quadric_placement(
     let region = geodesic_voronoi_regions(input, seeds)?;
     // The selected positions; the first `seeds.len()` are the anchors of the solves.
     let anchors: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
-    let quadrics = region_quadrics(input, &region, seeds.len());
+    let mut quadrics = region_face_quadrics(input, &region, seeds.len());
+    add_border_quadrics(input, &region, &mut quadrics);
     let mut reach = vec![0.0f64; seeds.len()];
     for (p, &r) in input.vertices().iter().zip(&region) {
         if let Some(reach) = reach.get_mut(r as usize) {
@@ -88,38 +91,95 @@ pub fn region_quadric_placement(
     Ok(placed.iter().map(|p| p.map(|x| x as f32)).collect())
 }
 
-/// Per region, the area-weighted plane quadrics of every face at each of its corners in the
-/// region, plus the border planes of the border edges it touches (module docs).
-fn region_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadric> {
-    let position = |v: u32| to_f64(input.vertices()[v as usize]);
-    let mut quadrics = vec![Quadric::default(); regions];
-    let mut add = |v: u32, q: Quadric| {
-        if let Some(sum) = quadrics.get_mut(region[v as usize] as usize) {
-            *sum += q;
+/// `seeds` moved within their regions: each to the vertex of its geodesic Voronoi region with
+/// the least error under the region's face quadric, `Q(v) + μ·|v − seed|²` (`μ` the pull of
+/// [`region_quadric_placement`]'s solve, so that where every vertex fits, as on a flat
+/// region, the seed stays): the discrete form of that placement, for a simplifier to take
+/// before it connects its selection, so that a seed whose region holds a corner moves onto
+/// it, one whose region holds a crease onto the crease, and one on a curved region towards
+/// its middle. Border planes are left out: they would pull every region that touches an open
+/// border onto it. Errors when a seed is out of range or repeated.
+///
+/// ```
+/// use meshgnn_geometry::{TriMesh, grid_plane};
+/// use meshgnn_graph::region_quadric_vertices;
+/// // A flat square: every vertex fits its region's plane, each seed stays.
+/// let square = grid_plane(4, 4);
+/// assert_eq!(region_quadric_vertices(&square, &[0, 12, 24])?, vec![0, 12, 24]);
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn region_quadric_vertices(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
+    let region = geodesic_voronoi_regions(input, seeds)?;
+    let quadrics = region_face_quadrics(input, &region, seeds.len());
+    let anchors: Vec<[f64; 3]> = seeds
+        .iter()
+        .map(|&s| to_f64(input.vertices()[s as usize]))
+        .collect();
+    // Another seed's vertex is never taken: a seed at the position of another (an unwelded
+    // seam) may lie in that one's region and keeps its place, so the result stays distinct.
+    let mut seed_of = vec![u32::MAX; input.vertex_count()];
+    for (i, &s) in seeds.iter().enumerate() {
+        seed_of[s as usize] = i as u32;
+    }
+    let mut best: Vec<(f64, u32)> = seeds.iter().map(|&s| (f64::INFINITY, s)).collect();
+    for (v, (p, &r)) in input.vertices().iter().zip(&region).enumerate() {
+        let Some(slot) = best.get_mut(r as usize) else {
+            continue; // reached by no seed
+        };
+        if seed_of[v] != u32::MAX && seed_of[v] != r {
+            continue;
         }
-    };
-    let face_normal = |t: &[u32; 3]| {
-        let [p0, p1, p2] = t.map(position);
-        (cross(sub(p1, p0), sub(p2, p0)), p0)
-    };
-    for t in input.triangles() {
-        let (normal, point) = face_normal(t);
-        let plane = Quadric::from_plane(normal, point, 0.5 * norm(normal));
-        for &v in t {
-            add(v, plane);
+        let quadric = &quadrics[r as usize];
+        let p = to_f64(*p);
+        let d = sub(p, anchors[r as usize]);
+        let error = quadric.evaluate(p) + ANCHOR_STRENGTH * quadric.weight() / 3.0 * dot(d, d);
+        if error < slot.0 {
+            *slot = (error, v as u32);
         }
     }
+    Ok(best.into_iter().map(|(_, v)| v).collect())
+}
+
+/// Adds `quadric` to the region of input vertex `v`, if a seed reached it.
+fn add_to_region(quadrics: &mut [Quadric], region: &[u32], v: u32, quadric: Quadric) {
+    if let Some(sum) = quadrics.get_mut(region[v as usize] as usize) {
+        *sum += quadric;
+    }
+}
+
+/// The area-weighted normal (doubled) of face `t` and one of its corners.
+fn face_plane(input: &TriMesh, t: &[u32; 3]) -> ([f64; 3], [f64; 3]) {
+    let [p0, p1, p2] = t.map(|v| to_f64(input.vertices()[v as usize]));
+    (cross(sub(p1, p0), sub(p2, p0)), p0)
+}
+
+/// Per region, the area-weighted plane quadrics of every face at each of its corners in the
+/// region.
+fn region_face_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadric> {
+    let mut quadrics = vec![Quadric::default(); regions];
+    for t in input.triangles() {
+        let (normal, point) = face_plane(input, t);
+        let plane = Quadric::from_plane(normal, point, 0.5 * norm(normal));
+        for &v in t {
+            add_to_region(&mut quadrics, region, v, plane);
+        }
+    }
+    quadrics
+}
+
+/// Adds to each region the border planes of the border edges it touches (module docs).
+fn add_border_quadrics(input: &TriMesh, region: &[u32], quadrics: &mut [Quadric]) {
     let boundary_weight = DecimationOptions::default().boundary_weight;
     let topology = edge_topology(input);
     for (e, &[a, b]) in topology.edges().iter().enumerate() {
         if let [incidence] = topology.incidences(e) {
-            let (normal, _) = face_normal(&input.triangles()[incidence.face as usize]);
-            let plane = Quadric::border_plane(position(a), position(b), normal, boundary_weight);
-            add(a, plane);
-            add(b, plane);
+            let (normal, _) = face_plane(input, &input.triangles()[incidence.face as usize]);
+            let at = |v: u32| to_f64(input.vertices()[v as usize]);
+            let plane = Quadric::border_plane(at(a), at(b), normal, boundary_weight);
+            add_to_region(quadrics, region, a, plane);
+            add_to_region(quadrics, region, b, plane);
         }
     }
-    quadrics
 }
 
 /// Puts moved vertices back at their anchors until no face of `output` turns by more than
@@ -181,6 +241,72 @@ mod tests {
             }
         }
         sum / count
+    }
+
+    #[test]
+    fn a_seed_beside_a_corner_moves_onto_it() {
+        // The cube [-1, 1]³ in cells of 1/3, one seed per octant on the face x = ±1, two
+        // cells in from the corner along y and z: its region holds the corner, the one vertex
+        // on all three of the region's planes.
+        let cube = meshgnn_geometry::subdivided_cube(6);
+        let index_of = |p: [f32; 3]| {
+            let near = |a: [f32; 3]| (0..3).all(|k| (a[k] - p[k]).abs() < 1e-6);
+            cube.vertices().iter().position(|&q| near(q)).unwrap() as u32
+        };
+        let octants: Vec<[f32; 3]> = (0..8)
+            .map(|i| [0, 1, 2].map(|k| if i >> k & 1 == 1 { 1.0 } else { -1.0 }))
+            .collect();
+        let two_thirds = 2.0 / 3.0;
+        let seeds: Vec<u32> = octants
+            .iter()
+            .map(|c| index_of([c[0], c[1] * two_thirds, c[2] * two_thirds]))
+            .collect();
+        let corners: Vec<u32> = octants.iter().map(|&c| index_of(c)).collect();
+        assert_eq!(region_quadric_vertices(&cube, &seeds).unwrap(), corners);
+    }
+
+    #[test]
+    fn a_seed_beside_a_crease_moves_onto_it_and_the_others_stay() {
+        // Seeds on the cube [-1, 1]³ in cells of 1/3 at every vertex whose coordinates are
+        // ±1 or ±1/3 (corners, crease points, face points), one of them, the crease point
+        // (1, 1, 1/3), put a cell away from its crease, onto the face x = 1. Its region holds
+        // that crease point and no corner; every other seed already fits its region best.
+        let cube = meshgnn_geometry::subdivided_cube(6);
+        let on_lattice = |x: f32| {
+            [-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0]
+                .iter()
+                .any(|l| (x - l).abs() < 1e-6)
+        };
+        let mut seeds: Vec<u32> = (0..cube.vertex_count() as u32)
+            .filter(|&v| cube.vertices()[v as usize].iter().all(|&x| on_lattice(x)))
+            .collect();
+        let index_of = |p: [f32; 3]| {
+            let near = |a: [f32; 3]| (0..3).all(|k| (a[k] - p[k]).abs() < 1e-6);
+            cube.vertices().iter().position(|&q| near(q)).unwrap() as u32
+        };
+        let crease = index_of([1.0, 1.0, 1.0 / 3.0]);
+        let beside = index_of([1.0, 2.0 / 3.0, 1.0 / 3.0]);
+        let moved_seed = seeds.iter().position(|&s| s == crease).unwrap();
+        seeds[moved_seed] = beside;
+        let mut expected = seeds.clone();
+        expected[moved_seed] = crease;
+        assert_eq!(region_quadric_vertices(&cube, &seeds).unwrap(), expected);
+    }
+
+    #[test]
+    fn seeds_at_one_position_stay_distinct() {
+        // Vertex 9 sits on the centre vertex 4 of a 3 × 3 grid, joined to it by a zero-length
+        // edge (a degenerate face): both seeds are at distance 0 from both vertices.
+        let grid = grid_plane(2, 2);
+        let mut vertices = grid.vertices().to_vec();
+        vertices.push(vertices[4]);
+        let mut faces = grid.triangles().to_vec();
+        faces.push([4, 9, 0]);
+        let mesh = TriMesh::new(vertices, faces).unwrap();
+        for seeds in [[4, 9], [9, 4]] {
+            let moved = region_quadric_vertices(&mesh, &seeds).unwrap();
+            assert_ne!(moved[0], moved[1], "{seeds:?} → {moved:?}");
+        }
     }
 
     #[test]

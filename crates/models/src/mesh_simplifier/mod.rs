@@ -47,7 +47,8 @@ pub use neighbour_deviation_maximum::neighbour_deviation_maximum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MIN_NEURAL_FACES, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
-    NeuralSimplification, NeuralSimplifyOptions, SAMPLER_CLOUD_NEIGHBOURS, SimplifierPass,
+    NeuralSimplification, NeuralSimplifyOptions, QUADRIC_SEED_ROUNDS, SAMPLER_CLOUD_NEIGHBOURS,
+    SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{

@@ -1,7 +1,8 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
-//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]), the edge
-//! predictor connects them (`A_s`) and proposes candidate triangles, the face classifier
+//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then each
+//! seed moved to the vertex of its region that fits the region's faces best,
+//! [`region_quadric_vertices`], [`QUADRIC_SEED_ROUNDS`] times), the edge predictor connects them (`A_s`) and proposes candidate triangles, the face classifier
 //! scores each. [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
 //! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
 //! edge-manifold, each facing along the input's normals
@@ -26,8 +27,8 @@ use meshgnn_geometry::{
     select_manifold_faces, unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, Target, hilbert_order, region_quadric_placement, systematic_sampling,
-    vertex_adjacency,
+    CsrMatrix, Target, hilbert_order, region_quadric_placement, region_quadric_vertices,
+    systematic_sampling, vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -49,6 +50,12 @@ pub const MIN_NEURAL_FACES: usize = 100;
 
 /// Face probability above which a candidate is kept (ch. 6.4).
 pub const FACE_THRESHOLD: f32 = 0.5;
+
+/// Rounds of [`region_quadric_vertices`] after the draw (beyond the thesis): each moves every
+/// seed to the vertex of its region that fits the region's faces best, and the regions follow.
+/// Two measured best of 0-4 (docs/mesh_simplifier_model.md, "Seeds moved to their regions'
+/// best-fitting vertex").
+pub const QUADRIC_SEED_ROUNDS: usize = 2;
 
 /// Hyper-parameters of the three modules; defaults are the thesis' (ch. 6.4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -217,7 +224,10 @@ impl NeuralMeshSimplifier {
             target,
             seed,
         )?;
-        let sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
+        let mut sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
+        for _ in 0..QUADRIC_SEED_ROUNDS {
+            sampled.indices = region_quadric_vertices(&input.surface, &sampled.indices)?;
+        }
         progress(0.05);
         let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
         let graph = ExtendedGraph::new(
