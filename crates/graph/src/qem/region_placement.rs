@@ -111,30 +111,38 @@ pub fn region_quadric_placement(
 pub fn region_quadric_vertices(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     let region = geodesic_voronoi_regions(input, seeds)?;
     let quadrics = region_face_quadrics(input, &region, seeds.len());
-    let anchors: Vec<[f64; 3]> = seeds
-        .iter()
-        .map(|&s| to_f64(input.vertices()[s as usize]))
-        .collect();
-    // Another seed's vertex is never taken: a seed at the position of another (an unwelded
-    // seam) may lie in that one's region and keeps its place, so the result stays distinct.
+    let error = |r: usize, v: u32| {
+        let quadric = &quadrics[r];
+        let p = to_f64(input.vertices()[v as usize]);
+        let d = sub(p, to_f64(input.vertices()[seeds[r] as usize]));
+        quadric.evaluate(p) + ANCHOR_STRENGTH * quadric.weight() / 3.0 * dot(d, d)
+    };
+    // Another seed's vertex is never taken: a seed at the position of another (coincident
+    // vertices joined by a zero-length edge) may lie in that one's region and then keeps its
+    // place, so the result stays distinct. A seed in its own region is the first candidate,
+    // so a tie (a region without area) keeps it.
     let mut seed_of = vec![u32::MAX; input.vertex_count()];
     for (i, &s) in seeds.iter().enumerate() {
         seed_of[s as usize] = i as u32;
     }
-    let mut best: Vec<(f64, u32)> = seeds.iter().map(|&s| (f64::INFINITY, s)).collect();
-    for (v, (p, &r)) in input.vertices().iter().zip(&region).enumerate() {
-        let Some(slot) = best.get_mut(r as usize) else {
+    let mut best: Vec<(f64, u32)> = seeds
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| match region[s as usize] as usize == i {
+            true => (error(i, s), s),
+            false => (f64::INFINITY, s),
+        })
+        .collect();
+    for (v, &r) in region.iter().enumerate() {
+        let Some(&(least, _)) = best.get(r as usize) else {
             continue; // reached by no seed
         };
-        if seed_of[v] != u32::MAX && seed_of[v] != r {
-            continue;
+        if seed_of[v] != u32::MAX {
+            continue; // a seed: its own region's first candidate, or another's to leave alone
         }
-        let quadric = &quadrics[r as usize];
-        let p = to_f64(*p);
-        let d = sub(p, anchors[r as usize]);
-        let error = quadric.evaluate(p) + ANCHOR_STRENGTH * quadric.weight() / 3.0 * dot(d, d);
-        if error < slot.0 {
-            *slot = (error, v as u32);
+        let e = error(r as usize, v as u32);
+        if e < least {
+            best[r as usize] = (e, v as u32);
         }
     }
     Ok(best.into_iter().map(|(_, v)| v).collect())
@@ -307,6 +315,15 @@ mod tests {
             let moved = region_quadric_vertices(&mesh, &seeds).unwrap();
             assert_ne!(moved[0], moved[1], "{seeds:?} → {moved:?}");
         }
+    }
+
+    #[test]
+    fn a_region_without_area_keeps_its_seed() {
+        // A 3 × 3 grid squashed onto a line: every face degenerate, every error zero.
+        let grid = grid_plane(2, 2);
+        let line: Vec<[f32; 3]> = grid.vertices().iter().map(|p| [p[0], 0.0, 0.0]).collect();
+        let mesh = TriMesh::new(line, grid.triangles().to_vec()).unwrap();
+        assert_eq!(region_quadric_vertices(&mesh, &[4]).unwrap(), vec![4]);
     }
 
     #[test]
