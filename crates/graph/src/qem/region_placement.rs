@@ -101,7 +101,7 @@ pub fn region_quadric_placement(
 /// border onto it. Errors when a seed is out of range or repeated.
 ///
 /// ```
-/// use meshgnn_geometry::{TriMesh, grid_plane};
+/// use meshgnn_geometry::grid_plane;
 /// use meshgnn_graph::region_quadric_vertices;
 /// // A flat square: every vertex fits its region's plane, each seed stays.
 /// let square = grid_plane(4, 4);
@@ -128,9 +128,12 @@ pub fn region_quadric_vertices(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
     let mut best: Vec<(f64, u32)> = seeds
         .iter()
         .enumerate()
-        .map(|(i, &s)| match region[s as usize] as usize == i {
-            true => (error(i, s), s),
-            false => (f64::INFINITY, s),
+        .map(|(i, &s)| {
+            if region[s as usize] as usize == i {
+                (error(i, s), s)
+            } else {
+                (f64::INFINITY, s)
+            }
         })
         .collect();
     for (v, &r) in region.iter().enumerate() {

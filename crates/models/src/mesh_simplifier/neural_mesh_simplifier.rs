@@ -2,8 +2,9 @@
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
 //! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then each
 //! seed moved to the vertex of its region that fits the region's faces best,
-//! [`region_quadric_vertices`], [`QUADRIC_SEED_ROUNDS`] times), the edge predictor connects them (`A_s`) and proposes candidate triangles, the face classifier
-//! scores each. [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
+//! [`region_quadric_vertices`], [`QUADRIC_SEED_ROUNDS`] times), the edge predictor connects
+//! them (`A_s`) and proposes candidate triangles, the face classifier scores each.
+//! [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
 //! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
 //! edge-manifold, each facing along the input's normals
 //! ([`meshgnn_geometry::select_manifold_faces`]) and, when asked, closes the holes left: first
