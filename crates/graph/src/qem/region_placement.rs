@@ -439,7 +439,8 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
         /// On a noisy sphere (some faces cut away, so it has borders) with any seeds and
         /// their Voronoi-dual faces: finite positions, no face turned past the bound, every
-        /// vertex within its region's reach, the same result twice.
+        /// vertex within its region's reach, the same result twice; and the seeds moved to
+        /// their regions' best-fitting vertices stay distinct and in their regions.
         #[test]
         fn placement_is_finite_bounded_and_never_flips_a_face(
             noise in 0.0f32..0.3,
@@ -498,6 +499,17 @@ mod tests {
                     proptest::prop_assert!(dot(n0, n1) > (MIN_NORMAL_COSINE - 1e-3) * norm(n0) * norm(n1));
                 }
             }
+            // The discrete form on the same input: one distinct vertex per seed, each in its
+            // seed's region, the same result twice.
+            let moved = region_quadric_vertices(&input, &seeds).unwrap();
+            let mut distinct = moved.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            proptest::prop_assert_eq!(distinct.len(), seeds.len());
+            for (o, &m) in moved.iter().enumerate() {
+                proptest::prop_assert_eq!(region[m as usize] as usize, o);
+            }
+            proptest::prop_assert_eq!(&moved, &region_quadric_vertices(&input, &seeds).unwrap());
         }
     }
 
