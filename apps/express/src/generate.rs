@@ -8,9 +8,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use meshgnn_data::{SequenceTiming, View, contact_sheet, write_png};
-use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
-    MorphAnimation, OutputGuard, TriMesh, read_mesh, write_mesh, write_morph_animation,
+    MorphAnimation, OutputGuard, TriMesh, read_mesh, stderr_line, stdout_line, write_mesh,
+    write_morph_animation,
 };
 use serde_json::json;
 
@@ -171,7 +171,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
                    "preview": args.preview.as_ref().map(|p| p.display().to_string())})
         );
     } else {
-        eprintln!(
+        stderr_line!(
             "generated {} frames in {:.3} s -> {}",
             frames.len(),
             seconds,

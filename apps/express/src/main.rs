@@ -7,6 +7,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use meshgnn_geometry::stderr_line;
 
 mod eval;
 mod face_folder;
@@ -36,7 +37,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
-        eprintln!("express: installing the interrupt handler: {error}");
+        stderr_line!("express: installing the interrupt handler: {error}");
         return ExitCode::FAILURE;
     }
     let result = match &cli.command {
@@ -47,7 +48,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("express: {error:#}");
+            stderr_line!("express: {error:#}");
             ExitCode::FAILURE
         }
     }

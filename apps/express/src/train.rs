@@ -10,8 +10,7 @@ use anyhow::{Result, bail};
 use candle_core::Device;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, check_count};
+use meshgnn_geometry::{OutputGuard, check_count, stderr_line, stdout_line};
 use meshgnn_models::expression::{
     DecoderKind, ExpressionGeneratorConfig, ExpressionModel, ExpressionTraining,
 };
@@ -130,7 +129,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         displacement_scale: train.displacement_rms().max(1e-6),
         ..Default::default()
     };
-    eprintln!(
+    stderr_line!(
         "training the {:?} expression model on {} sequences ({} frames) of {} subjects, choosing \
          the epoch on {} held-out subjects",
         args.decoder,
@@ -150,7 +149,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 &validation,
                 args.seed,
             )?;
-            eprintln!("{taken} parameter tensors start from {}", path.display());
+            stderr_line!("{taken} parameter tensors start from {}", path.display());
             task
         }
         None => ExpressionTraining::new(
@@ -183,7 +182,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     let run = training::train(&mut task, &training_config, &mut |p| {
         if p.epoch_end {
             bar.suspend(|| {
-                eprintln!(
+                stderr_line!(
                     "epoch {:>3}: loss {:.4}, train {:.3} mm, held-out {:.3} mm{}",
                     p.epoch + 1,
                     p.loss,
@@ -199,7 +198,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     let best = run.state.best_validation;
-    eprintln!(
+    stderr_line!(
         "wrote {} (best held-out error {:.3} mm) in {:.0} s",
         args.output.display(),
         best.unwrap_or(f64::NAN),

@@ -10,8 +10,7 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{MAX_SURFACE_SAMPLES, check_count};
+use meshgnn_geometry::{MAX_SURFACE_SAMPLES, check_count, stderr_line, stdout_line};
 use meshgnn_losses::metrics::ErrorSummary;
 use meshgnn_models::handy::{
     HandEvaluation, HandEvaluationOptions, HandSplits, evaluate_hand_model,
@@ -130,7 +129,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             train.len()
         );
     }
-    eprintln!(
+    stderr_line!(
         "{} (latent {z}) from {}; PCA with {z} components fitted on {} training meshes",
         loaded.kind(),
         loaded.source,
@@ -275,6 +274,6 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             a.vertex
         );
     }
-    eprintln!("evaluated in {:.0} s", started.elapsed().as_secs_f64());
+    stderr_line!("evaluated in {:.0} s", started.elapsed().as_secs_f64());
     Ok(())
 }

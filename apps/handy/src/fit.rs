@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use meshgnn_data::{View, points_on_mesh_sheet, write_png};
-use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
-    OutputGuard, TriMesh, bounding_box_diagonal, check_count, read_input_point_cloud, write_mesh,
+    OutputGuard, TriMesh, bounding_box_diagonal, check_count, read_input_point_cloud, stdout_line,
+    write_mesh,
 };
 use meshgnn_models::{ChamferDirection, MAX_FIT_STEPS, MorphableModel, ScanFitOptions, fit_scan};
 use serde_json::json;

@@ -5,8 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_mesh};
+use meshgnn_geometry::{OutputGuard, TriMesh, check_count, read_mesh, stderr_line, stdout_line};
 use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, check_registered, interpolate_shapes};
 use serde_json::json;
 
@@ -68,7 +67,7 @@ pub fn run(args: &InterpolateArgs) -> Result<()> {
             json!({"steps": args.steps, "files": files, "contact_sheet": sheet.display().to_string()})
         );
     } else {
-        eprintln!("{} meshes → {}", meshes.len(), args.output.display());
+        stderr_line!("{} meshes → {}", meshes.len(), args.output.display());
     }
     Ok(())
 }

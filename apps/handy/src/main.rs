@@ -7,6 +7,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use meshgnn_geometry::stderr_line;
 
 mod dataset;
 mod eval;
@@ -43,7 +44,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
-        eprintln!("handy: installing the interrupt handler: {error}");
+        stderr_line!("handy: installing the interrupt handler: {error}");
         return ExitCode::FAILURE;
     }
     let result = match &cli.command {
@@ -56,7 +57,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("handy: {error:#}");
+            stderr_line!("handy: {error:#}");
             ExitCode::FAILURE
         }
     }

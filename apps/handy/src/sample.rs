@@ -6,8 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, check_count};
+use meshgnn_geometry::{OutputGuard, check_count, stderr_line, stdout_line};
 use meshgnn_models::{MAX_DECODED_SHAPES, MorphableModel, decode_latents};
 use serde_json::json;
 
@@ -64,7 +63,7 @@ pub fn run(args: &SampleArgs) -> Result<()> {
             json!({"count": args.count, "seed": args.seed, "files": files, "contact_sheet": sheet.display().to_string(), "latents": latents})
         );
     } else {
-        eprintln!(
+        stderr_line!(
             "{} hands from {} → {} (contact sheet {})",
             args.count,
             loaded.kind(),

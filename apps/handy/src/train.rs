@@ -8,8 +8,7 @@ use anyhow::{Context, Result};
 use candle_core::Device;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, check_count};
+use meshgnn_geometry::{OutputGuard, check_count, stderr_line, stdout_line};
 use meshgnn_models::spiral::{SpiralAutoencoderConfig, SpiralTraining};
 use meshgnn_models::training::{self, TrainingConfig};
 use meshgnn_models::{
@@ -139,7 +138,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         resume: args.resume && args.output.exists(),
         best_weights: None,
     };
-    eprintln!(
+    stderr_line!(
         "training Handy++ (latent {}) on {} meshes of {} vertices, validating on {}",
         args.latent,
         train.len(),
@@ -182,7 +181,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             );
             // a hidden bar (no terminal, e.g. a log file) drops `println`
             if bar.is_hidden() {
-                eprintln!("{line}");
+                stderr_line!("{line}");
             } else {
                 bar.println(line);
             }
@@ -228,7 +227,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     if args.json {
         stdout_line!("{summary}");
     } else {
-        eprintln!(
+        stderr_line!(
             "done in {:.0} s: train {train_mm:.3} mm, validation {} mm → {}",
             trained.seconds,
             val_mm.map_or("-".into(), |v| format!("{v:.3}")),

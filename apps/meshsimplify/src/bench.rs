@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{InputUse, OutputGuard, atomic_write, mesh_files_in, read_input_mesh};
+use meshgnn_geometry::{
+    InputUse, OutputGuard, atomic_write, mesh_files_in, read_input_mesh, stdout_line,
+};
 use meshgnn_graph::Target;
 use meshgnn_losses::metrics::{
     MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, TableColumn, comparison_table,

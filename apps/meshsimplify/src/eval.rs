@@ -12,8 +12,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{InputUse, check_count, read_input_mesh};
+use meshgnn_geometry::{InputUse, check_count, read_input_mesh, stdout_line};
 use meshgnn_losses::metrics::{
     MAX_MESH_EVALUATION_SAMPLES, MESH_EVALUATION_SAMPLES, MeshEvaluation, mesh_evaluation,
 };

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{InputUse, MeshReport, mesh_files_in, mesh_report, read_input_mesh};
+use meshgnn_geometry::{
+    InputUse, MeshReport, mesh_files_in, mesh_report, read_input_mesh, stderr_line, stdout_line,
+};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -43,7 +44,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             match result {
                 Ok(report) => reports.push(report),
                 Err(error) => {
-                    eprintln!("meshsimplify: {error:#}");
+                    stderr_line!("meshsimplify: {error:#}");
                     failed += 1;
                 }
             }

@@ -6,6 +6,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use meshgnn_geometry::stderr_line;
 
 mod bench;
 mod eval;
@@ -37,7 +38,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
-        eprintln!("meshsimplify: installing the interrupt handler: {error}");
+        stderr_line!("meshsimplify: installing the interrupt handler: {error}");
         return ExitCode::FAILURE;
     }
     let result = match &cli.command {
@@ -49,7 +50,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("meshsimplify: {error:#}");
+            stderr_line!("meshsimplify: {error:#}");
             ExitCode::FAILURE
         }
     }

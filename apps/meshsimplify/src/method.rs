@@ -9,8 +9,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{TangentChartOptions, TriMesh, tangent_chart_triangulation, vertex_normals};
+use meshgnn_geometry::{
+    TangentChartOptions, TriMesh, stdout_line, tangent_chart_triangulation, vertex_normals,
+};
 use meshgnn_graph::{DecimationOptions, Target, decimate_keeping};
 use meshgnn_models::mesh_simplifier::{NeuralMeshSimplifier, NeuralSimplifyOptions};
 use meshgnn_models::point_selection::{SelectionInput, SelectionMethod, SelectionModel, select};

@@ -37,9 +37,9 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshgnn_data::{View, contact_sheet, write_png};
-use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
-    InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, read_vertex_list, write_mesh,
+    InputUse, MeshFormat, OutputGuard, mesh_files_in, read_input_mesh, read_vertex_list,
+    stderr_line, stdout_line, write_mesh,
 };
 use meshgnn_graph::Target;
 use rayon::prelude::*;
@@ -275,7 +275,7 @@ fn run_folder(args: &SimplifyArgs, simplifier: &Simplifier) -> Result<()> {
                     let line = json!({ "input": input.display().to_string(), "failure": message });
                     stdout_line!("{line}");
                 }
-                eprintln!("meshsimplify: {message}");
+                stderr_line!("meshsimplify: {message}");
             }
         }
     }

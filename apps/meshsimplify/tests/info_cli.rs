@@ -127,3 +127,18 @@ fn a_full_disk_behind_stdout_is_one_line_on_stderr() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.contains("writing to standard output"), "{stderr}");
 }
+
+#[test]
+fn an_error_whose_stderr_reader_has_gone_still_exits_with_status_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.off");
+    // `eprintln!` would panic here (status 101) on the error line it cannot write.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_meshsimplify"))
+        .args(["info", missing.to_str().unwrap()])
+        .stderr(writer)
+        .output()
+        .expect("the binary runs");
+    assert_eq!(out.status.code(), Some(1));
+}

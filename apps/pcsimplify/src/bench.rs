@@ -9,8 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use meshgnn_data::gaussian_noise;
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, atomic_write, mesh_files_in};
+use meshgnn_geometry::{OutputGuard, atomic_write, mesh_files_in, stdout_line};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, TableColumn, comparison_table, point_cloud_evaluation,
 };

@@ -11,8 +11,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{check_count, read_input_point_cloud};
+use meshgnn_geometry::{check_count, read_input_point_cloud, stdout_line};
 use meshgnn_losses::metrics::{
     EVALUATION_CURVATURE_NEIGHBOURS, MAX_EVALUATION_CURVATURE_NEIGHBOURS, PointCloudEvaluation,
     point_cloud_evaluation,

@@ -7,6 +7,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use meshgnn_geometry::stderr_line;
 
 mod bench;
 mod eval;
@@ -38,7 +39,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(error) = meshgnn_geometry::remove_temporaries_on_interrupt() {
-        eprintln!("pcsimplify: installing the interrupt handler: {error}");
+        stderr_line!("pcsimplify: installing the interrupt handler: {error}");
         return ExitCode::FAILURE;
     }
     let result = match &cli.command {
@@ -50,7 +51,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("pcsimplify: {error:#}");
+            stderr_line!("pcsimplify: {error:#}");
             ExitCode::FAILURE
         }
     }

@@ -8,10 +8,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use meshgnn_data::{ColoredPoints, View, point_cloud_sheet, value_colors, write_png};
-use meshgnn_geometry::stdout_line;
 use meshgnn_geometry::{
     MeshFormat, OutputGuard, PointCloud, TangentChartOptions, TriMesh, curvature_features,
-    mesh_report, tangent_chart_triangulation, write_mesh, write_point_cloud,
+    mesh_report, stdout_line, tangent_chart_triangulation, write_mesh, write_point_cloud,
 };
 use serde_json::{Value, json};
 

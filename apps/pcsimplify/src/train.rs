@@ -17,8 +17,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use meshgnn_data::{FolderDataset, gaussian_noise};
-use meshgnn_geometry::stdout_line;
-use meshgnn_geometry::{OutputGuard, check_count, sample_surface};
+use meshgnn_geometry::{OutputGuard, check_count, sample_surface, stderr_line, stdout_line};
 use meshgnn_models::point_simplifier::{
     PointSimplifierConfig, SelectorSpace, SimplifierObjective, SimplifierTraining, TrainingSample,
     prepare_denoising_sample,
@@ -188,7 +187,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     ) {
         bar.set_style(style);
     }
-    eprintln!(
+    stderr_line!(
         "training on {clouds} clouds of {} points from {} shapes ({:?}; {} held out: {:?}), {} epochs{}",
         args.points,
         train_names.len(),
@@ -235,7 +234,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         );
         // a hidden bar (output not a terminal, e.g. a log file) prints nothing: log plainly
         if bar.is_hidden() {
-            eprintln!("{line}");
+            stderr_line!("{line}");
         } else {
             bar.println(line);
         }

@@ -22,7 +22,7 @@ use meshgnn_data::{
     ShapeFamily, View, contact_sheet, hand_splits, lidar_scene, noisy_scan, shape_mesh,
     write_manifest, write_png,
 };
-use meshgnn_geometry::{TriMesh, check_count, write_mesh, write_point_cloud};
+use meshgnn_geometry::{TriMesh, check_count, stderr_line, write_mesh, write_point_cloud};
 use rayon::prelude::*;
 use serde_json::json;
 
@@ -138,7 +138,7 @@ fn preview_sheet(
 ) -> Result<()> {
     if let Some(path) = path {
         write_png(path, &contact_sheet(meshes, columns, tile, view)?)?;
-        eprintln!("preview: {}", path.display());
+        stderr_line!("preview: {}", path.display());
     }
     Ok(())
 }
@@ -359,7 +359,7 @@ fn faces(
     };
     write_manifest(output, &manifest)?;
     let (files, bytes) = folder_size(output)?;
-    eprintln!(
+    stderr_line!(
         "faces: {count} subjects ({} train / {} test), {files} files, {:.2} GB in {}",
         count - cfg.test_subjects(),
         cfg.test_subjects(),
@@ -506,7 +506,7 @@ fn main() -> std::process::ExitCode {
     match run(&Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("synth: {error:#}");
+            stderr_line!("synth: {error:#}");
             std::process::ExitCode::FAILURE
         }
     }
@@ -558,6 +558,6 @@ fn run(cli: &Cli) -> Result<()> {
             )?;
         }
     }
-    eprintln!("done in {:.1} s", start.elapsed().as_secs_f64());
+    stderr_line!("done in {:.1} s", start.elapsed().as_secs_f64());
     Ok(())
 }

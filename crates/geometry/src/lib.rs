@@ -62,10 +62,10 @@ pub use error::{Error, Result};
 pub use faer;
 pub use io::{
     BROKEN_PIPE_STATUS, MeshFormat, MorphAnimation, OutputGuard, PlyEncoding, atomic_write,
-    mesh_files_in, morph_animation_glb_bytes, print_stdout, read_mesh, read_mesh_bytes,
-    read_morph_animation, read_point_cloud, read_point_cloud_bytes, read_vertex_list,
-    read_vertex_list_bytes, remove_temporaries_on_interrupt, write_mesh, write_morph_animation,
-    write_ply, write_point_cloud,
+    mesh_files_in, morph_animation_glb_bytes, print_stderr, print_stdout, read_mesh,
+    read_mesh_bytes, read_morph_animation, read_point_cloud, read_point_cloud_bytes,
+    read_vertex_list, read_vertex_list_bytes, remove_temporaries_on_interrupt, write_mesh,
+    write_morph_animation, write_ply, write_point_cloud,
 };
 pub use point_cloud::PointCloud;
 pub use primitives::{grid_plane, icosphere, subdivided_cube};

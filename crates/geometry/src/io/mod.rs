@@ -37,7 +37,7 @@ pub use output_guard::OutputGuard;
 pub use ply::PlyEncoding;
 pub use read_mesh::{read_mesh, read_mesh_bytes};
 pub use read_point_cloud::{read_point_cloud, read_point_cloud_bytes};
-pub use standard_output::{BROKEN_PIPE_STATUS, print_stdout};
+pub use standard_output::{BROKEN_PIPE_STATUS, print_stderr, print_stdout};
 pub use vertex_list::{read_vertex_list, read_vertex_list_bytes};
 pub use write_mesh::{write_mesh, write_ply};
 pub use write_point_cloud::write_point_cloud;

@@ -1,11 +1,14 @@
-//! The apps' standard output, through [`print_stdout`] and [`stdout_line!`](crate::stdout_line).
+//! The apps' standard output and error, through [`print_stdout`] and
+//! [`stdout_line!`](crate::stdout_line), [`print_stderr`] and [`stderr_line!`](crate::stderr_line).
 //!
 //! `println!` panics when its reader has gone (`meshsimplify info F | head -1`): Rust ignores
 //! SIGPIPE, so the write fails with `BrokenPipe`. Here the process ends instead, as SIGPIPE
 //! ends `cat`: no message, this process's temporary files removed, status 141 (128 + SIGPIPE,
 //! what a shell reports for a process that signal ended). Any other write error (a full disk
 //! behind `>`) ends it with one line on stderr and status 1. Resetting SIGPIPE to its default
-//! action would need `unsafe`, which this workspace denies.
+//! action would need `unsafe`, which this workspace denies. Messages on stderr (progress, the
+//! final error) are written where they can be and dropped where not: `eprintln!` would panic
+//! once stderr's reader has gone, and there is nowhere left to report that.
 
 use std::io::Write;
 
@@ -38,5 +41,21 @@ macro_rules! stdout_line {
     };
     ($($arg:tt)*) => {
         $crate::print_stdout(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// Writes `text` to standard error, dropping it when that fails (module documentation).
+pub fn print_stderr(text: std::fmt::Arguments) {
+    let _ = std::io::stderr().lock().write_fmt(text);
+}
+
+/// `eprintln!` for the apps: one line on standard error through [`print_stderr`].
+#[macro_export]
+macro_rules! stderr_line {
+    () => {
+        $crate::print_stderr(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::print_stderr(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
