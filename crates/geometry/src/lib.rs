@@ -25,6 +25,7 @@ pub mod vec3;
 
 mod boundary_loops;
 mod bounding_box;
+mod cap_flips;
 mod connected_components;
 mod connected_regions;
 mod cotangent_laplacian;
@@ -73,6 +74,7 @@ pub use tri_mesh::TriMesh;
 
 pub use boundary_loops::boundary_loops;
 pub use bounding_box::{bounding_box, bounding_box_diagonal};
+pub use cap_flips::{CAP_RELATIVE_HEIGHT, flip_caps};
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use connected_regions::{connected_nearest_seed_regions, island_seeds};
 pub use cotangent_laplacian::cotangent_laplacian;

@@ -36,7 +36,7 @@ pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_ma
 pub use qem::{
     Decimation, DecimationOptions, QemVertices, Quadric, StopReason, Target, decimate,
     decimate_keeping, decimate_with_progress, qem_vertices, region_quadric_placement,
-    region_quadric_vertices,
+    region_quadric_vertices, region_seed_exchange,
 };
 
 pub use balanced_sampling::balanced_sampling;

@@ -166,7 +166,11 @@ fn face_plane(input: &TriMesh, t: &[u32; 3]) -> ([f64; 3], [f64; 3]) {
 
 /// Per region, the area-weighted plane quadrics of every face at each of its corners in the
 /// region.
-fn region_face_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadric> {
+pub(super) fn region_face_quadrics(
+    input: &TriMesh,
+    region: &[u32],
+    regions: usize,
+) -> Vec<Quadric> {
     let mut quadrics = vec![Quadric::default(); regions];
     for t in input.triangles() {
         let (normal, point) = face_plane(input, t);

@@ -47,7 +47,7 @@ pub use neighbour_deviation_maximum::neighbour_deviation_maximum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MIN_NEURAL_FACES, MeshInput, NeuralMeshSimplifier, NeuralMeshSimplifierConfig,
-    NeuralSimplification, NeuralSimplifyOptions, QUADRIC_SEED_ROUNDS, SAMPLER_CLOUD_NEIGHBOURS,
+    NeuralSimplification, NeuralSimplifyOptions, SAMPLER_CLOUD_NEIGHBOURS, SEED_EXCHANGE_ROUNDS,
     SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};

@@ -2,8 +2,10 @@
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
 //! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then each
 //! seed moved to the vertex of its region that fits the region's faces best,
-//! [`region_quadric_vertices`], [`QUADRIC_SEED_ROUNDS`] times), the edge predictor connects
-//! them (`A_s`) and proposes candidate triangles, the face classifier scores each.
+//! [`region_quadric_vertices`], after the draw and after each of [`SEED_EXCHANGE_ROUNDS`]
+//! rounds that move seeds from where they are cheapest to drop to where the surface fits its
+//! regions worst, [`region_seed_exchange`]), the edge predictor connects them (`A_s`) and
+//! proposes candidate triangles, the face classifier scores each.
 //! [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
 //! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
 //! edge-manifold, each facing along the input's normals
@@ -12,7 +14,8 @@
 //! small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond the
 //! thesis, each selected vertex then moves to the quadric optimum of the input region it
 //! stands for ([`meshgnn_graph::region_quadric_placement`]) unless
-//! [`NeuralSimplifyOptions::keep_positions`] asks for the thesis' selection as it is.
+//! [`NeuralSimplifyOptions::keep_positions`] asks for the thesis' selection as it is, and cap
+//! faces are flipped away ([`meshgnn_geometry::flip_caps`]).
 //!
 //! # Conventions
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
@@ -24,12 +27,12 @@
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_geometry::{
-    TriMesh, boundary_loops, close_cracks, fill_holes, nearest_seed_dual_triangles,
+    TriMesh, boundary_loops, close_cracks, fill_holes, flip_caps, nearest_seed_dual_triangles,
     select_manifold_faces, unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
     CsrMatrix, Target, hilbert_order, region_quadric_placement, region_quadric_vertices,
-    systematic_sampling, vertex_adjacency,
+    region_seed_exchange, systematic_sampling, vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -52,11 +55,11 @@ pub const MIN_NEURAL_FACES: usize = 100;
 /// Face probability above which a candidate is kept (ch. 6.4).
 pub const FACE_THRESHOLD: f32 = 0.5;
 
-/// Rounds of [`region_quadric_vertices`] after the draw (beyond the thesis): each moves every
-/// seed to the vertex of its region that fits the region's faces best, and the regions follow.
-/// Two measured best of 0-4 (docs/mesh_simplifier_model.md, "Seeds moved to their regions'
-/// best-fitting vertex").
-pub const QUADRIC_SEED_ROUNDS: usize = 2;
+/// Rounds of [`region_seed_exchange`] after the draw (beyond the thesis), each followed by
+/// [`region_quadric_vertices`], as is the draw: seeds move from the regions cheapest to drop
+/// to those their seed fits worst, then every seed to the vertex of its region that fits the
+/// region's faces best (docs/mesh_simplifier_model.md, "Seeds exchanged by quadric error").
+pub const SEED_EXCHANGE_ROUNDS: usize = 2;
 
 /// Hyper-parameters of the three modules; defaults are the thesis' (ch. 6.4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -226,7 +229,9 @@ impl NeuralMeshSimplifier {
             seed,
         )?;
         let mut sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
-        for _ in 0..QUADRIC_SEED_ROUNDS {
+        sampled.indices = region_quadric_vertices(&input.surface, &sampled.indices)?;
+        for _ in 0..SEED_EXCHANGE_ROUNDS {
+            sampled.indices = region_seed_exchange(&input.surface, &sampled.indices)?;
             sampled.indices = region_quadric_vertices(&input.surface, &sampled.indices)?;
         }
         progress(0.05);
@@ -354,7 +359,9 @@ impl NeuralMeshSimplifier {
     /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
     /// then the manifold pass (module docs), the vertices placed unless
     /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
-    /// closed with rejected candidates and every hole of at most `k` edges filled.
+    /// closed with rejected candidates and every hole of at most `k` edges filled; last, cap
+    /// faces (three kept vertices along a straight crease) flipped away
+    /// ([`meshgnn_geometry::flip_caps`]).
     /// Errors on a mesh without faces, a bad target or `k` above
     /// [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`].
     pub fn simplify(
@@ -426,6 +433,7 @@ impl NeuralMeshSimplifier {
                 fill_holes(&TriMesh::new(vertices, closed)?, max_edges)?
             }
         };
+        let mesh = flip_caps(&mesh)?;
         progress(1.0);
         Ok(NeuralSimplification {
             wa: watertightness(&mesh),
