@@ -243,8 +243,8 @@ fn the_neural_method_keeps_about_the_target_vertices_edge_manifold_and_reports_w
     // 10 % of the 2 562 vertices, placed off the input's vertices (each at its region's
     // quadric optimum); with --keep-positions every one at an input vertex, the same faces.
     // Vertices cut off from their nearest drawn vertex get seeds of their own and the draw
-    // shrinks by as many, so the count is near the target, not on it: 255 for seed 3.
-    assert_eq!(mesh.vertex_count(), 255);
+    // shrinks by as many, so the count is near the target, not always on it: 256 for seed 3.
+    assert_eq!(mesh.vertex_count(), 256);
     let input_vertices: std::collections::HashSet<[u32; 3]> = read_mesh(&input)
         .unwrap()
         .vertices()
@@ -257,7 +257,7 @@ fn the_neural_method_keeps_about_the_target_vertices_edge_manifold_and_reports_w
     };
     let (_, selected, _) = run("d.ply", &["--keep-positions"]);
     assert_eq!(selected.triangles(), mesh.triangles());
-    assert_eq!(at_input(&selected), 255);
+    assert_eq!(at_input(&selected), 256);
     assert!(
         at_input(&mesh) < 26,
         "{} placed vertices at input ones",

@@ -25,7 +25,7 @@ use crate::error::Result;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{cross, dot, norm, sub, to_f64};
 
-/// Height of a flat corner over its opposite edge, relative to that edge's length: a few
+/// Height of a flat corner over its opposite edge, relative to that edge's length: about 16
 /// `f32` rounding steps (2⁻²⁴ ≈ 6·10⁻⁸ relative), so that only corners on the edge to within
 /// the rounding of the coordinates count.
 pub const CAP_RELATIVE_HEIGHT: f64 = 1e-6;
@@ -43,7 +43,8 @@ type EdgeFaces = HashMap<(u32, u32), Vec<(usize, bool)>>;
 /// use meshgnn_geometry::{TriMesh, flip_caps};
 /// // Square (0, 1, 2, 3) split by diagonal 0-2, with vertex 4 the middle of that diagonal:
 /// // face (0, 2, 4) is a cap; flipping 0-2 gives two faces that cover the other half.
-/// let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.5, 0.0]];
+/// let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+/// let v = [v, vec![[0.5, 0.5, 0.0]]].concat();
 /// let mesh = TriMesh::new(v, vec![[0, 1, 2], [0, 2, 4], [2, 3, 4], [3, 0, 4]])?;
 /// let flipped = flip_caps(&mesh)?;
 /// assert_eq!(flipped.triangles(), &[[4, 1, 2], [4, 0, 1], [2, 3, 4], [3, 0, 4]]);

@@ -15,8 +15,9 @@
 //! The cheapest drops pair with the worst fits while the saving exceeds the cost; a dropped
 //! region never touches another dropped or a split one, so each estimate stays valid for the
 //! round. The count stays, a region without a neighbour (an island's only seed) is never
-//! dropped, and the seeds stay distinct. [`super::region_quadric_vertices`] then settles the
-//! moved seeds on their new regions' best-fitting vertices.
+//! dropped, a connected component with fewer than `MIN_COMPONENT_SEEDS` seeds neither gives
+//! nor takes one, and the seeds stay distinct. [`super::region_quadric_vertices`] then settles
+//! the moved seeds on their new regions' best-fitting vertices.
 
 use meshgnn_geometry::vec3::to_f64;
 use meshgnn_geometry::{TriMesh, connected_components, geodesic_voronoi_regions};
@@ -37,7 +38,7 @@ const MIN_COMPONENT_SEEDS: usize = 4;
 /// Errors when a seed is out of range or repeated.
 ///
 /// ```
-/// use meshgnn_geometry::{TriMesh, icosphere, grid_plane};
+/// use meshgnn_geometry::grid_plane;
 /// use meshgnn_graph::region_seed_exchange;
 /// // A flat square fits every region exactly: nothing to gain, every seed stays.
 /// let square = grid_plane(6, 6);
