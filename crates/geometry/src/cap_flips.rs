@@ -78,15 +78,18 @@ fn flat_corner(vertices: &[[f32; 3]], t: &[u32; 3]) -> Option<usize> {
     })
 }
 
-/// True when `b` projects strictly inside segment `ac` within [`CAP_RELATIVE_HEIGHT`]·|ac|.
+/// True when `b` projects strictly inside segment `ac` and lies on its line.
 fn on_segment(b: [f64; 3], a: [f64; 3], c: [f64; 3]) -> bool {
     let edge = sub(c, a);
     let length_squared = dot(edge, edge);
     let along = dot(sub(b, a), edge);
-    length_squared > 0.0
-        && along > 0.0
-        && along < length_squared
-        && norm(cross(edge, sub(b, a))) <= CAP_RELATIVE_HEIGHT * length_squared
+    length_squared > 0.0 && along > 0.0 && along < length_squared && on_line(b, a, c)
+}
+
+/// True when `p` lies within [`CAP_RELATIVE_HEIGHT`]·|ac| of the line through `a` and `c`.
+fn on_line(p: [f64; 3], a: [f64; 3], c: [f64; 3]) -> bool {
+    let edge = sub(c, a);
+    norm(cross(edge, sub(p, a))) <= CAP_RELATIVE_HEIGHT * dot(edge, edge)
 }
 
 /// Flips the edge opposite the flat corner of face `f` when the conventions allow; true when
@@ -115,9 +118,7 @@ fn flip_cap(
         return false;
     };
     let at = |v: u32| to_f64(vertices[v as usize]);
-    let d_flat = norm(cross(sub(at(c), at(a)), sub(at(d), at(a))))
-        <= CAP_RELATIVE_HEIGHT * dot(sub(at(c), at(a)), sub(at(c), at(a)));
-    if d == b || d_flat || edge_faces.contains_key(&key(b, d)) {
+    if d == b || on_line(at(d), at(a), at(c)) || edge_faces.contains_key(&key(b, d)) {
         return false;
     }
     remove_face(edge_faces, f, &faces[f]);
