@@ -118,7 +118,7 @@ pub use tangent_chart_triangulation::{
 };
 pub use vertex_normals::vertex_normals;
 pub use voronoi_dual::{
-    geodesic_voronoi_regions, nearest_seed_dual_triangles, nearest_seed_regions,
+    geodesic_voronoi_regions, nearest_seed_dual_triangles, nearest_seed_regions, seed_of_vertex,
     voronoi_dual_triangles,
 };
 pub use watertight::is_watertight;

@@ -36,7 +36,7 @@ use crate::vertex_normals::vertex_normals;
 /// Errors when a seed is out of range or repeated.
 pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
     let n = mesh.vertex_count();
-    let mut region = seed_regions(n, seeds)?;
+    let mut region = seed_of_vertex(n, seeds)?;
     let neighbours = VertexNeighbours::new(mesh);
     let v = mesh.vertices();
     let mut distance = vec![f64::INFINITY; n];
@@ -95,7 +95,7 @@ const FACING_CANDIDATES: usize = 8;
 /// along the surface would. Errors when a seed is out of range or repeated, or a position is
 /// not finite.
 pub fn nearest_seed_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
-    seed_regions(mesh.vertex_count(), seeds)?;
+    seed_of_vertex(mesh.vertex_count(), seeds)?;
     let v = mesh.vertices();
     let normals = vertex_normals(mesh);
     let positions: Vec<[f32; 3]> = seeds.iter().map(|&s| v[s as usize]).collect();
@@ -137,9 +137,17 @@ pub fn nearest_seed_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<
     ))
 }
 
-/// `u32::MAX` everywhere but at the seeds, which hold their index; errors when a seed is out
-/// of range or repeated.
-fn seed_regions(n: usize, seeds: &[u32]) -> Result<Vec<u32>> {
+/// Per vertex of a mesh of `n` vertices, the index of the seed on it, `u32::MAX` elsewhere:
+/// the regions before any vertex joins one. Errors when a seed is out of range or repeated.
+///
+/// ```
+/// let seed_of = meshgnn_geometry::seed_of_vertex(4, &[2, 0])?;
+/// assert_eq!(seed_of, vec![1, u32::MAX, 0, u32::MAX]);
+/// assert!(meshgnn_geometry::seed_of_vertex(4, &[2, 2]).is_err());
+/// assert!(meshgnn_geometry::seed_of_vertex(4, &[4]).is_err());
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn seed_of_vertex(n: usize, seeds: &[u32]) -> Result<Vec<u32>> {
     let mut region = vec![u32::MAX; n];
     for (s, &v) in seeds.iter().enumerate() {
         let slot = region.get_mut(v as usize).ok_or(Error::IndexOutOfRange {

@@ -2,9 +2,10 @@
 //! decimation itself ([`decimate`], algorithm and guarantees in `decimation.rs`), the plane
 //! quadrics it sums ([`Quadric`]), QEM vertex selection for point clouds on a mesh
 //! ([`qem_vertices`], thesis ch. 5.5) and, for the neural mesh simplifier of ch. 6, the
-//! selected vertices moved to their regions' best-fitting vertex ([`region_quadric_vertices`]),
-//! exchanged between regions by quadric error ([`region_seed_exchange`]) and placed at their
-//! quadric optimum ([`region_quadric_placement`]). The other files
+//! selected vertices' regions with their quadrics ([`SeedRegions`]), the vertices moved to
+//! their regions' best-fitting vertex ([`region_quadric_vertices`]), exchanged between
+//! regions by quadric error ([`region_seed_exchange`]) and placed at their quadric optimum
+//! ([`region_quadric_placement`]). The other files
 //! are the decimation's parts: welding, vertex records and collapses, edge placement,
 //! validity checks, candidate sorting, speculative parallel checks, memory warm-up and the
 //! changed-vertex sets.
@@ -18,6 +19,7 @@ mod memory_warmup;
 mod quadric;
 mod region_placement;
 mod seed_exchange;
+mod seed_regions;
 mod speculation;
 mod vertex_bits;
 mod vertex_selection;
@@ -30,4 +32,5 @@ pub use decimation::{
 pub use quadric::Quadric;
 pub use region_placement::{region_quadric_placement, region_quadric_vertices};
 pub use seed_exchange::region_seed_exchange;
+pub use seed_regions::SeedRegions;
 pub use vertex_selection::{QemVertices, qem_vertices};

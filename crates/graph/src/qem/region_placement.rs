@@ -24,6 +24,7 @@ use meshgnn_geometry::{TriMesh, edge_topology, geodesic_voronoi_regions};
 
 use super::decimation::DecimationOptions;
 use super::quadric::Quadric;
+use super::seed_regions::{SeedRegions, add_to_region, face_plane, region_face_quadrics};
 use crate::error::{Error, Result};
 
 /// Pull of the selected position on its region's optimum, relative to the region's mean
@@ -91,40 +92,44 @@ pub fn region_quadric_placement(
     Ok(placed.iter().map(|p| p.map(|x| x as f32)).collect())
 }
 
-/// `seeds` moved within their regions: each to the vertex of its geodesic Voronoi region with
-/// the least error under the region's face quadric, `Q(v) + μ·|v − seed|²` (`μ` the pull of
+/// `seeds` moved within their regions: each to the vertex of its region (in `regions`, built
+/// from these seeds or from seeds each inside the region it names) with the least error under
+/// the region's face quadric, `Q(v) + μ·|v − seed|²` (`μ` the pull of
 /// [`region_quadric_placement`]'s solve, so that where every vertex fits, as on a flat
 /// region, the seed stays): the discrete form of that placement, for a simplifier to take
 /// before it connects its selection, so that a seed whose region holds a corner moves onto
 /// it, one whose region holds a crease onto the crease, and one on a curved region towards
 /// its middle. Border planes are left out: they would pull every region that touches an open
-/// border onto it. Errors when a seed is out of range or repeated.
+/// border onto it. Errors when the seeds do not match the regions, are out of range or
+/// repeated.
 ///
 /// ```
 /// use meshgnn_geometry::grid_plane;
-/// use meshgnn_graph::region_quadric_vertices;
+/// use meshgnn_graph::{SeedRegions, region_quadric_vertices};
 /// // A flat square: every vertex fits its region's plane, each seed stays.
 /// let square = grid_plane(4, 4);
-/// assert_eq!(region_quadric_vertices(&square, &[0, 12, 24])?, vec![0, 12, 24]);
+/// let seeds = [0, 12, 24];
+/// let regions = SeedRegions::new(&square, &seeds)?;
+/// assert_eq!(region_quadric_vertices(&square, &regions, &seeds)?, seeds);
 /// # Ok::<(), meshgnn_graph::Error>(())
 /// ```
-pub fn region_quadric_vertices(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
-    let region = geodesic_voronoi_regions(input, seeds)?;
-    let quadrics = region_face_quadrics(input, &region, seeds.len());
+pub fn region_quadric_vertices(
+    input: &TriMesh,
+    regions: &SeedRegions,
+    seeds: &[u32],
+) -> Result<Vec<u32>> {
+    // Another seed's vertex is never taken: a seed at the position of another (coincident
+    // vertices joined by a zero-length edge) may lie in that one's region and then keeps its
+    // place, so the result stays distinct. A seed in its own region is the first candidate,
+    // so a tie (a region without area) keeps it.
+    let seed_of = regions.seed_of_vertex(input, seeds)?;
+    let (region, quadrics) = (regions.region(), regions.quadrics());
     let error = |r: usize, v: u32| {
         let quadric = &quadrics[r];
         let p = to_f64(input.vertices()[v as usize]);
         let d = sub(p, to_f64(input.vertices()[seeds[r] as usize]));
         quadric.evaluate(p) + ANCHOR_STRENGTH * quadric.weight() / 3.0 * dot(d, d)
     };
-    // Another seed's vertex is never taken: a seed at the position of another (coincident
-    // vertices joined by a zero-length edge) may lie in that one's region and then keeps its
-    // place, so the result stays distinct. A seed in its own region is the first candidate,
-    // so a tie (a region without area) keeps it.
-    let mut seed_of = vec![u32::MAX; input.vertex_count()];
-    for (i, &s) in seeds.iter().enumerate() {
-        seed_of[s as usize] = i as u32;
-    }
     let mut best: Vec<(f64, u32)> = seeds
         .iter()
         .enumerate()
@@ -151,35 +156,10 @@ pub fn region_quadric_vertices(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
     Ok(best.into_iter().map(|(_, v)| v).collect())
 }
 
-/// Adds `quadric` to the region of input vertex `v`, if a seed reached it.
-fn add_to_region(quadrics: &mut [Quadric], region: &[u32], v: u32, quadric: Quadric) {
-    if let Some(sum) = quadrics.get_mut(region[v as usize] as usize) {
-        *sum += quadric;
-    }
-}
-
-/// The area-weighted normal (doubled) of face `t` and one of its corners.
-fn face_plane(input: &TriMesh, t: &[u32; 3]) -> ([f64; 3], [f64; 3]) {
-    let [p0, p1, p2] = t.map(|v| to_f64(input.vertices()[v as usize]));
-    (cross(sub(p1, p0), sub(p2, p0)), p0)
-}
-
-/// Per region, the area-weighted plane quadrics of every face at each of its corners in the
-/// region.
-pub(super) fn region_face_quadrics(
-    input: &TriMesh,
-    region: &[u32],
-    regions: usize,
-) -> Vec<Quadric> {
-    let mut quadrics = vec![Quadric::default(); regions];
-    for t in input.triangles() {
-        let (normal, point) = face_plane(input, t);
-        let plane = Quadric::from_plane(normal, point, 0.5 * norm(normal));
-        for &v in t {
-            add_to_region(&mut quadrics, region, v, plane);
-        }
-    }
-    quadrics
+/// `seeds` settled on the regions they make (the tests' shorthand for a settling round).
+#[cfg(test)]
+pub(super) fn settle(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
+    region_quadric_vertices(input, &SeedRegions::new(input, seeds)?, seeds)
 }
 
 /// Adds to each region the border planes of the border edges it touches (module docs).
@@ -277,7 +257,7 @@ mod tests {
             .map(|c| index_of([c[0], c[1] * two_thirds, c[2] * two_thirds]))
             .collect();
         let corners: Vec<u32> = octants.iter().map(|&c| index_of(c)).collect();
-        assert_eq!(region_quadric_vertices(&cube, &seeds).unwrap(), corners);
+        assert_eq!(settle(&cube, &seeds).unwrap(), corners);
     }
 
     #[test]
@@ -305,7 +285,7 @@ mod tests {
         seeds[moved_seed] = beside;
         let mut expected = seeds.clone();
         expected[moved_seed] = crease;
-        assert_eq!(region_quadric_vertices(&cube, &seeds).unwrap(), expected);
+        assert_eq!(settle(&cube, &seeds).unwrap(), expected);
     }
 
     #[test]
@@ -319,7 +299,7 @@ mod tests {
         faces.push([4, 9, 0]);
         let mesh = TriMesh::new(vertices, faces).unwrap();
         for seeds in [[4, 9], [9, 4]] {
-            let moved = region_quadric_vertices(&mesh, &seeds).unwrap();
+            let moved = settle(&mesh, &seeds).unwrap();
             assert_ne!(moved[0], moved[1], "{seeds:?} → {moved:?}");
         }
     }
@@ -330,7 +310,7 @@ mod tests {
         let grid = grid_plane(2, 2);
         let line: Vec<[f32; 3]> = grid.vertices().iter().map(|p| [p[0], 0.0, 0.0]).collect();
         let mesh = TriMesh::new(line, grid.triangles().to_vec()).unwrap();
-        assert_eq!(region_quadric_vertices(&mesh, &[4]).unwrap(), vec![4]);
+        assert_eq!(settle(&mesh, &[4]).unwrap(), vec![4]);
     }
 
     #[test]
@@ -505,7 +485,7 @@ mod tests {
             }
             // The discrete form on the same input: one distinct vertex per seed, each in its
             // seed's region, the same result twice.
-            let moved = region_quadric_vertices(&input, &seeds).unwrap();
+            let moved = settle(&input, &seeds).unwrap();
             let mut distinct = moved.clone();
             distinct.sort_unstable();
             distinct.dedup();
@@ -513,7 +493,7 @@ mod tests {
             for (o, &m) in moved.iter().enumerate() {
                 proptest::prop_assert_eq!(region[m as usize] as usize, o);
             }
-            proptest::prop_assert_eq!(&moved, &region_quadric_vertices(&input, &seeds).unwrap());
+            proptest::prop_assert_eq!(&moved, &settle(&input, &seeds).unwrap());
         }
     }
 

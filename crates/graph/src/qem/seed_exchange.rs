@@ -4,8 +4,10 @@
 //! by probability gives every stretch of surface about as many vertices as its density asks:
 //! a coarse part of few, large faces (a low-poly model's body) keeps too few corners while a
 //! finely tessellated, nearly flat one keeps more than it needs. Each seed stands for its
-//! geodesic Voronoi region, whose faces' summed plane quadric `Q_r` measures how well the
-//! seed alone represents it (Garland & Heckbert's error of collapsing the region onto it):
+//! geodesic Voronoi region ([`SeedRegions`]: those of the seeds before
+//! [`super::region_quadric_vertices`] settled them, which they stay inside), whose faces'
+//! summed plane quadric `Q_r` measures how well the seed alone represents it (Garland &
+//! Heckbert's error of collapsing the region onto it):
 //! - the **fit** of region `r` is `Q_r(seed_r)`;
 //! - its **drop cost** is the least increase when a neighbouring seed `t` takes it over,
 //!   `min_t Q_r(seed_t) − Q_r(seed_r)`;
@@ -20,9 +22,9 @@
 //! the moved seeds on their new regions' best-fitting vertices.
 
 use meshgnn_geometry::vec3::to_f64;
-use meshgnn_geometry::{TriMesh, connected_components, geodesic_voronoi_regions};
+use meshgnn_geometry::{TriMesh, connected_components};
 
-use super::region_placement::region_face_quadrics;
+use super::seed_regions::SeedRegions;
 use crate::error::Result;
 
 /// Share of a region's fit a split is estimated to save.
@@ -33,34 +35,37 @@ const SPLIT_SAVING: f64 = 0.5;
 /// with fewer neither gives nor takes one: its regions' fits measure no faces of the output.
 const MIN_COMPONENT_SEEDS: usize = 4;
 
-/// `seeds` after one round of exchanges (module docs): the seeds of the regions cheapest to
-/// drop replaced, in place, by the worst-fitting vertices of the regions that fit worst.
-/// Errors when a seed is out of range or repeated.
+/// `seeds` after one round of exchanges (module docs) on `regions` (built from these seeds
+/// or from seeds each inside the region it names): the seeds of the regions cheapest to drop
+/// replaced, in place, by the worst-fitting vertices of the regions that fit worst. Errors
+/// when the seeds do not match the regions, are out of range or repeated.
 ///
 /// ```
 /// use meshgnn_geometry::grid_plane;
-/// use meshgnn_graph::region_seed_exchange;
+/// use meshgnn_graph::{SeedRegions, region_seed_exchange};
 /// // A flat square fits every region exactly: nothing to gain, every seed stays.
 /// let square = grid_plane(6, 6);
-/// assert_eq!(region_seed_exchange(&square, &[0, 20, 48])?, vec![0, 20, 48]);
+/// let seeds = [0, 20, 48];
+/// let regions = SeedRegions::new(&square, &seeds)?;
+/// assert_eq!(region_seed_exchange(&square, &regions, &seeds)?, seeds);
 /// # Ok::<(), meshgnn_graph::Error>(())
 /// ```
-pub fn region_seed_exchange(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> {
-    let region = geodesic_voronoi_regions(input, seeds)?;
-    let quadrics = region_face_quadrics(input, &region, seeds.len());
+pub fn region_seed_exchange(
+    input: &TriMesh,
+    regions: &SeedRegions,
+    seeds: &[u32],
+) -> Result<Vec<u32>> {
+    let seed_of = regions.seed_of_vertex(input, seeds)?;
+    let (region, quadrics) = (regions.region(), regions.quadrics());
     let position = |v: u32| to_f64(input.vertices()[v as usize]);
     let fit: Vec<f64> = (0..seeds.len())
         .map(|r| quadrics[r].evaluate(position(seeds[r])))
         .collect();
-    let mut is_seed = vec![false; input.vertex_count()];
-    for &s in seeds {
-        is_seed[s as usize] = true;
-    }
     // Worst-fitting vertex of each region, not a seed: where a split would put its new seed.
     let mut worst: Vec<(f64, u32)> = vec![(f64::NEG_INFINITY, u32::MAX); seeds.len()];
     for (v, &r) in region.iter().enumerate() {
         if let Some(w) = worst.get_mut(r as usize)
-            && !is_seed[v]
+            && seed_of[v] == u32::MAX
         {
             let e = quadrics[r as usize].evaluate(position(v as u32));
             if e > w.0 {
@@ -135,18 +140,27 @@ pub fn region_seed_exchange(input: &TriMesh, seeds: &[u32]) -> Result<Vec<u32>> 
 
 #[cfg(test)]
 mod tests {
+    use super::super::region_placement::settle;
     use super::*;
     use crate::region_quadric_vertices;
     use meshgnn_geometry::subdivided_cube;
 
     /// Σ_r Q_r(seed_r): how far the seeds' regions lie from their seeds' planes.
     fn total_fit(mesh: &TriMesh, seeds: &[u32]) -> f64 {
-        let region = geodesic_voronoi_regions(mesh, seeds).unwrap();
-        let quadrics = region_face_quadrics(mesh, &region, seeds.len());
+        let regions = SeedRegions::new(mesh, seeds).unwrap();
         let at = |v: u32| to_f64(mesh.vertices()[v as usize]);
         (0..seeds.len())
-            .map(|r| quadrics[r].evaluate(at(seeds[r])))
+            .map(|r| regions.quadrics()[r].evaluate(at(seeds[r])))
             .sum()
+    }
+
+    /// `seeds` settled on their regions, then exchanged on the same regions, as a round of
+    /// the neural simplifier does; the regions' settled seeds and the exchanged ones.
+    fn settle_and_exchange(mesh: &TriMesh, seeds: &[u32]) -> (Vec<u32>, Vec<u32>) {
+        let regions = SeedRegions::new(mesh, seeds).unwrap();
+        let settled = region_quadric_vertices(mesh, &regions, seeds).unwrap();
+        let exchanged = region_seed_exchange(mesh, &regions, &settled).unwrap();
+        (settled, exchanged)
     }
 
     fn sorted(seeds: &[u32]) -> Vec<u32> {
@@ -161,9 +175,8 @@ mod tests {
         // Every seventh vertex, settled on its region's best vertex: regions across the
         // cube's edges and corners fit badly, those inside its faces exactly.
         let drawn: Vec<u32> = (0..cube.vertex_count() as u32).step_by(7).collect();
-        let settled = region_quadric_vertices(&cube, &drawn).unwrap();
-        let exchanged = region_seed_exchange(&cube, &settled).unwrap();
-        let after = region_quadric_vertices(&cube, &exchanged).unwrap();
+        let (settled, exchanged) = settle_and_exchange(&cube, &drawn);
+        let after = settle(&cube, &exchanged).unwrap();
         assert_eq!(exchanged.len(), settled.len());
         let distinct = sorted(&exchanged);
         assert!(distinct.windows(2).all(|w| w[0] < w[1]));
@@ -171,7 +184,7 @@ mod tests {
         let (before, now) = (total_fit(&cube, &settled), total_fit(&cube, &after));
         assert!(now < 0.8 * before, "fit {before} → {now}");
         // The same input, the same result.
-        assert_eq!(region_seed_exchange(&cube, &settled).unwrap(), exchanged);
+        assert_eq!(settle_and_exchange(&cube, &drawn).1, exchanged);
     }
 
     #[test]
@@ -187,7 +200,8 @@ mod tests {
         let few = [0, 40, 80];
         let many = (0..offset).step_by(5).map(|v| v + offset);
         let seeds: Vec<u32> = few.into_iter().chain(many).collect();
-        let exchanged = region_seed_exchange(&mesh, &seeds).unwrap();
+        let regions = SeedRegions::new(&mesh, &seeds).unwrap();
+        let exchanged = region_seed_exchange(&mesh, &regions, &seeds).unwrap();
         assert_ne!(exchanged, seeds);
         let in_first: Vec<u32> = exchanged.iter().copied().filter(|&v| v < offset).collect();
         assert_eq!(sorted(&in_first), sorted(&few));

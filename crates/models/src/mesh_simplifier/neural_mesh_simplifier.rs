@@ -1,11 +1,11 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
-//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then each
-//! seed moved to the vertex of its region that fits the region's faces best,
-//! [`region_quadric_vertices`], after the draw and after each of [`SEED_EXCHANGE_ROUNDS`]
-//! rounds that move seeds from where they are cheapest to drop to where the surface fits its
-//! regions worst, [`region_seed_exchange`]), the edge predictor connects them (`A_s`) and
-//! proposes candidate triangles, the face classifier scores each.
+//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then, in
+//! rounds on one geodesic partition each, each seed moved to the vertex of its region that
+//! fits the region's faces best, [`region_quadric_vertices`], and, in the first
+//! [`SEED_EXCHANGE_ROUNDS`], seeds moved from where they are cheapest to drop to where the
+//! surface fits its regions worst, [`region_seed_exchange`]), the edge predictor connects
+//! them (`A_s`) and proposes candidate triangles, the face classifier scores each.
 //! [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
 //! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
 //! edge-manifold, each facing along the input's normals
@@ -31,8 +31,8 @@ use meshgnn_geometry::{
     select_manifold_faces, unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, Target, hilbert_order, region_quadric_placement, region_quadric_vertices,
-    region_seed_exchange, systematic_sampling, vertex_adjacency,
+    CsrMatrix, SeedRegions, Target, hilbert_order, region_quadric_placement,
+    region_quadric_vertices, region_seed_exchange, systematic_sampling, vertex_adjacency,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -55,10 +55,13 @@ pub const MIN_NEURAL_FACES: usize = 100;
 /// Face probability above which a candidate is kept (ch. 6.4).
 pub const FACE_THRESHOLD: f32 = 0.5;
 
-/// Rounds of [`region_seed_exchange`] after the draw (beyond the thesis), each followed by
-/// [`region_quadric_vertices`], as is the draw: seeds move from the regions cheapest to drop
-/// to those their seed fits worst, then every seed to the vertex of its region that fits the
-/// region's faces best (docs/mesh_simplifier_model.md, "Seeds exchanged by quadric error").
+/// Rounds of [`region_seed_exchange`] after the draw (beyond the thesis). Each of the
+/// `SEED_EXCHANGE_ROUNDS + 1` rounds partitions the input among the seeds once
+/// ([`SeedRegions`]), moves every seed to the vertex of its region that fits the region's
+/// faces best ([`region_quadric_vertices`]) and then, but in the last, moves seeds from the
+/// regions cheapest to drop to those their seed fits worst, judged on the same regions
+/// (docs/mesh_simplifier_model.md, "Seeds exchanged by quadric error", "One partition per
+/// round").
 pub const SEED_EXCHANGE_ROUNDS: usize = 2;
 
 /// Hyper-parameters of the three modules; defaults are the thesis' (ch. 6.4).
@@ -229,10 +232,13 @@ impl NeuralMeshSimplifier {
             seed,
         )?;
         let mut sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
-        sampled.indices = region_quadric_vertices(&input.surface, &sampled.indices)?;
-        for _ in 0..SEED_EXCHANGE_ROUNDS {
-            sampled.indices = region_seed_exchange(&input.surface, &sampled.indices)?;
-            sampled.indices = region_quadric_vertices(&input.surface, &sampled.indices)?;
+        for round in 0..=SEED_EXCHANGE_ROUNDS {
+            // One partition per round: the settled seeds stay inside their regions.
+            let regions = SeedRegions::new(&input.surface, &sampled.indices)?;
+            sampled.indices = region_quadric_vertices(&input.surface, &regions, &sampled.indices)?;
+            if round < SEED_EXCHANGE_ROUNDS {
+                sampled.indices = region_seed_exchange(&input.surface, &regions, &sampled.indices)?;
+            }
         }
         progress(0.05);
         let dual = nearest_seed_dual_triangles(&input.surface, &sampled.indices)?;
