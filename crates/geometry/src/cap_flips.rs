@@ -12,7 +12,10 @@
 //!
 //! # Conventions
 //! - A corner is flat when it projects strictly inside the opposite edge and lies within
-//!   [`CAP_RELATIVE_HEIGHT`] of that edge's length from it.
+//!   [`CAP_RELATIVE_HEIGHT`] of that edge's length from it, or of the corners' largest
+//!   coordinate where that is larger: away from the origin, the rounding of `f32`
+//!   coordinates exceeds 10⁻⁶ of a short edge (a fandisk output kept a cap 1.07·10⁻⁶ of its
+//!   edge high, whose coordinates, 14 times its edge, round by 1.5·10⁻⁶ of it).
 //! - An edge is flipped only when exactly one other face uses it, in the opposite direction,
 //!   the new edge `bd` is not an edge yet and `d` is not itself flat on `ac`; otherwise the cap
 //!   stays (on a border, on a non-manifold edge).
@@ -25,9 +28,10 @@ use crate::error::Result;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{cross, dot, norm, sub, to_f64};
 
-/// Height of a flat corner over its opposite edge, relative to that edge's length: about 16
-/// `f32` rounding steps (2⁻²⁴ ≈ 6·10⁻⁸ relative), so that only corners on the edge to within
-/// the rounding of the coordinates count.
+/// Height of a flat corner over its opposite edge, relative to that edge's length or to the
+/// corners' largest coordinate, whichever is larger: about 16 `f32` rounding steps (2⁻²⁴ ≈
+/// 6·10⁻⁸ relative), so that only corners on the edge to within the rounding of the
+/// coordinates count.
 pub const CAP_RELATIVE_HEIGHT: f64 = 1e-6;
 
 /// Passes over the caps at most.
@@ -70,6 +74,27 @@ pub fn flip_caps(mesh: &TriMesh) -> Result<TriMesh> {
     TriMesh::new(vertices.to_vec(), faces)
 }
 
+/// True when `t`'s height over its longest edge is within the flat tolerance (module docs):
+/// its normal is rounding noise (a cap, or two corners in one place).
+pub(crate) fn is_flat(vertices: &[[f32; 3]], t: &[u32; 3]) -> bool {
+    let corners = t.map(|v| to_f64(vertices[v as usize]));
+    let longest = (0..3)
+        .map(|k| norm(sub(corners[(k + 1) % 3], corners[k])))
+        .fold(0.0, f64::max);
+    let [a, b, c] = corners;
+    norm(cross(sub(b, a), sub(c, a))) <= flat_height(longest, &corners) * longest
+}
+
+/// The height over a segment of length `length` below which a point counts as on it:
+/// [`CAP_RELATIVE_HEIGHT`] of `length` or of the largest coordinate of `points`.
+fn flat_height(length: f64, points: &[[f64; 3]]) -> f64 {
+    let magnitude = points
+        .iter()
+        .flatten()
+        .fold(0.0, |m: f64, x| m.max(x.abs()));
+    CAP_RELATIVE_HEIGHT * length.max(magnitude)
+}
+
 /// The position `k` of the flat corner of `t`, if it has one.
 fn flat_corner(vertices: &[[f32; 3]], t: &[u32; 3]) -> Option<usize> {
     (0..3).find(|&k| {
@@ -86,10 +111,11 @@ fn on_segment(b: [f64; 3], a: [f64; 3], c: [f64; 3]) -> bool {
     length_squared > 0.0 && along > 0.0 && along < length_squared && on_line(b, a, c)
 }
 
-/// True when `p` lies within [`CAP_RELATIVE_HEIGHT`]·|ac| of the line through `a` and `c`.
+/// True when `p` lies within the flat tolerance (module docs) of the line through `a` and `c`.
 fn on_line(p: [f64; 3], a: [f64; 3], c: [f64; 3]) -> bool {
     let edge = sub(c, a);
-    norm(cross(edge, sub(p, a))) <= CAP_RELATIVE_HEIGHT * dot(edge, edge)
+    let length = norm(edge);
+    norm(cross(edge, sub(p, a))) <= flat_height(length, &[p, a, c]) * length
 }
 
 /// Flips the edge opposite the flat corner of face `f` when the conventions allow; true when
@@ -205,6 +231,28 @@ mod tests {
         // Its neighbour's far vertex is already joined to the flat corner.
         let joined = TriMesh::new(v, vec![[0, 1, 2], [1, 0, 3], [2, 3, 0]]).unwrap();
         assert_eq!(flip_caps(&joined).unwrap().triangles(), joined.triangles());
+    }
+
+    #[test]
+    fn a_cap_far_from_the_origin_is_flipped_though_rounding_lifts_it() {
+        // Parallelogram A B C D around (1000, 1000) split by AC, with M a third of the way
+        // along AC: rounded to f32 (steps of 6·10⁻⁵ here), M lies more than 10⁻⁶ of |AC| off
+        // the diagonal, within the rounding of the coordinates.
+        let v: Vec<[f32; 3]> = vec![
+            [1000.0, 1000.0, 0.0],
+            [1003.0, 1000.0, 0.0],
+            [1003.0, 1001.0, 0.0],
+            [1000.0, 1001.0, 0.0],
+            [1001.0, 1000.0 + 1.0 / 3.0, 0.0],
+        ];
+        let [a, c, m] = [0, 2, 4].map(|i| to_f64(v[i]));
+        let height = norm(cross(sub(c, a), sub(m, a))) / norm(sub(c, a));
+        assert!(height > CAP_RELATIVE_HEIGHT * norm(sub(c, a)), "{height:e}");
+        let faces = vec![[0, 1, 2], [0, 2, 4], [0, 4, 3], [4, 2, 3]];
+        let flipped = flip_caps(&TriMesh::new(v, faces).unwrap()).unwrap();
+        let areas = face_areas(&flipped);
+        assert!(areas.iter().all(|&a| a > 0.1), "{areas:?}");
+        assert!((areas.iter().sum::<f64>() - 3.0).abs() < 1e-3);
     }
 
     #[test]

@@ -11,7 +11,11 @@
 //!    the same way as its neighbour, instead of turning a whole region inside out: propagated
 //!    across such folds, orientation had flipped large parts of the neural simplifier's output
 //!    (normal error 0.6 at 10 % of the test shapes; 0.08 with only the faces facing their
-//!    reference normals kept, measured).
+//!    reference normals kept, measured). A flat face (three kept vertices along a straight
+//!    crease: its normal is rounding noise) is turned instead to run its edges against its
+//!    oriented neighbours, the majority of its edges deciding, flat neighbours of flat faces
+//!    in turn: by its normal, 27 of 28 such caps in one output ran every edge the same way as
+//!    the face across it, so [`crate::flip_caps`] could not flip them away.
 //! 3. Without them, orientation propagates face to face across shared edges (breadth first,
 //!    lowest face index first: a neighbour is flipped when it runs the shared edge the same
 //!    way), and each connected component is flipped as a whole when its flux around its
@@ -21,6 +25,7 @@
 use std::collections::HashMap;
 use std::collections::VecDeque;
 
+use crate::cap_flips::is_flat;
 use crate::error::{Error, Result};
 use crate::vec3::{dot, sub, to_f64, triangle_cross};
 
@@ -89,7 +94,6 @@ pub fn select_manifold_faces(
             .total_cmp(&probabilities[a])
             .then(a.cmp(&b))
     });
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
     let mut uses: HashMap<(u32, u32), u8> = HashMap::new();
     let mut faces = Vec::new();
     for f in order {
@@ -97,7 +101,7 @@ pub fn select_manifold_faces(
         if a == b || b == c || a == c {
             continue;
         }
-        let edges = [key(a, b), key(b, c), key(c, a)];
+        let edges = [edge_key(a, b), edge_key(b, c), edge_key(c, a)];
         if edges.iter().all(|e| uses.get(e).copied().unwrap_or(0) < 2) {
             for e in edges {
                 *uses.entry(e).or_insert(0) += 1;
@@ -112,9 +116,11 @@ pub fn select_manifold_faces(
     Ok(faces)
 }
 
-/// Step 2 of the module docs: each face turned to face along the sum of its corners' normals.
+/// Step 2 of the module docs: each face turned to face along the sum of its corners' normals,
+/// then the flat faces turned to agree with their neighbours.
 fn orient_along(vertices: &[[f32; 3]], faces: &mut [[u32; 3]], normals: &[[f32; 3]]) {
-    for face in faces {
+    let flat: Vec<bool> = faces.iter().map(|t| is_flat(vertices, t)).collect();
+    for (face, _) in faces.iter_mut().zip(&flat).filter(|&(_, &flat)| !flat) {
         let reference = face
             .iter()
             .map(|&v| to_f64(normals[v as usize]))
@@ -127,20 +133,71 @@ fn orient_along(vertices: &[[f32; 3]], faces: &mut [[u32; 3]], normals: &[[f32; 
             face.swap(1, 2);
         }
     }
+    orient_by_neighbours(faces, flat);
+}
+
+/// Turns each face still `pending` to run its shared edges against the faces across them that
+/// are not, by majority (a tie keeps it); a face decided makes its pending neighbours
+/// decidable. Faces with no decided neighbour keep their orientation.
+fn orient_by_neighbours(faces: &mut [[u32; 3]], mut pending: Vec<bool>) {
+    let by_edge = faces_by_edge(faces);
+    let mut queue: VecDeque<usize> = (0..faces.len()).filter(|&f| pending[f]).collect();
+    while let Some(f) = queue.pop_front() {
+        if !pending[f] {
+            continue;
+        }
+        // Each edge of `f` with a face across it.
+        let across: Vec<(u32, u32, usize)> = edges_of(faces[f])
+            .into_iter()
+            .flat_map(|(a, b)| by_edge[&edge_key(a, b)].iter().map(move |&g| (a, b, g)))
+            .filter(|&(_, _, g)| g != f)
+            .collect();
+        let decided = across.iter().filter(|&&(_, _, g)| !pending[g]);
+        let against = decided
+            .clone()
+            .filter(|&&(a, b, g)| runs(faces[g], b, a))
+            .count();
+        let along = decided.count() - against;
+        if against + along == 0 {
+            continue;
+        }
+        if along > against {
+            faces[f].swap(1, 2);
+        }
+        pending[f] = false;
+        queue.extend(across.iter().map(|&(_, _, g)| g).filter(|&g| pending[g]));
+    }
+}
+
+/// The undirected key of edge `(a, b)`.
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// The directed edges of `t`.
+fn edges_of(t: [u32; 3]) -> [(u32, u32); 3] {
+    [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
+}
+
+/// True when `t` runs the directed edge `a → b`.
+fn runs(t: [u32; 3], a: u32, b: u32) -> bool {
+    edges_of(t).contains(&(a, b))
+}
+
+/// The faces on each undirected edge.
+fn faces_by_edge(faces: &[[u32; 3]]) -> HashMap<(u32, u32), Vec<usize>> {
+    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (f, &t) in faces.iter().enumerate() {
+        for (a, b) in edges_of(t) {
+            by_edge.entry(edge_key(a, b)).or_default().push(f);
+        }
+    }
+    by_edge
 }
 
 /// Step 3 of the module docs on edge-manifold `faces`.
 fn orient_consistently(vertices: &[[f32; 3]], faces: &mut [[u32; 3]]) {
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (f, &[a, b, c]) in faces.iter().enumerate() {
-        for e in [key(a, b), key(b, c), key(c, a)] {
-            by_edge.entry(e).or_default().push(f);
-        }
-    }
-    let runs = |t: [u32; 3], a: u32, b: u32| {
-        (t[0] == a && t[1] == b) || (t[1] == a && t[2] == b) || (t[2] == a && t[0] == b)
-    };
+    let by_edge = faces_by_edge(faces);
     let mut visited = vec![false; faces.len()];
     for seed in 0..faces.len() {
         if visited[seed] {
@@ -151,8 +208,8 @@ fn orient_consistently(vertices: &[[f32; 3]], faces: &mut [[u32; 3]]) {
         let mut queue = VecDeque::from([seed]);
         while let Some(f) = queue.pop_front() {
             let t = faces[f];
-            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                let Some(others) = by_edge.get(&key(a, b)) else {
+            for (a, b) in edges_of(t) {
+                let Some(others) = by_edge.get(&edge_key(a, b)) else {
                     continue;
                 };
                 for &g in others {
@@ -307,6 +364,29 @@ mod tests {
         let signs: Vec<bool> = z(&propagated).iter().map(|&z| z > 0.0).collect();
         assert_eq!(signs[0], signs[1]);
         assert_ne!(signs[1], signs[2]);
+    }
+
+    #[test]
+    fn a_cap_follows_its_neighbours_not_its_noisy_normal_and_then_flips_away() {
+        // Unit square: B below the diagonal AC, a fan from D above it, and M on the diagonal
+        // (1.2·10⁻⁷ below it after f32 rounding): cap A C M, consistent with its neighbours,
+        // would face −z by its own normal.
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.499_999_88, 0.0],
+        ];
+        assert!(triangle_cross([v[0], v[2], v[4]])[2] < 0.0);
+        let t = [[0, 1, 2], [0, 4, 2], [0, 4, 3], [4, 2, 3]];
+        let up = [[0.0, 0.0, 1.0]; 5];
+        let kept = select_manifold_faces(&v, &t, &[0.9; 4], 0.5, Some(&up)).unwrap();
+        assert!(consistently_oriented(&kept), "{kept:?}");
+        let flipped = crate::flip_caps(&TriMesh::new(v.to_vec(), kept).unwrap()).unwrap();
+        let areas = crate::face_areas(&flipped);
+        assert!(areas.iter().all(|&a| a > 0.1), "{areas:?}");
+        assert!((areas.iter().sum::<f64>() - 1.0).abs() < 1e-6);
     }
 
     #[test]

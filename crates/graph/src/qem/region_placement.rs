@@ -20,11 +20,11 @@
 //!   (hole-filling centres) never move.
 
 use meshgnn_geometry::vec3::{cross, dot, norm, sub, to_f64};
-use meshgnn_geometry::{TriMesh, edge_topology, geodesic_voronoi_regions};
+use meshgnn_geometry::{TriMesh, edge_topology};
 
 use super::decimation::DecimationOptions;
 use super::quadric::Quadric;
-use super::seed_regions::{SeedRegions, add_to_region, face_plane, region_face_quadrics};
+use super::seed_regions::{SeedRegions, add_to_region, face_plane};
 use crate::error::{Error, Result};
 
 /// Pull of the selected position on its region's optimum, relative to the region's mean
@@ -69,10 +69,12 @@ pub fn region_quadric_placement(
             ),
         });
     }
-    let region = geodesic_voronoi_regions(input, seeds)?;
+    let SeedRegions {
+        region,
+        mut quadrics,
+    } = SeedRegions::new(input, seeds)?;
     // The selected positions; the first `seeds.len()` are the anchors of the solves.
     let anchors: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
-    let mut quadrics = region_face_quadrics(input, &region, seeds.len());
     add_border_quadrics(input, &region, &mut quadrics);
     let mut reach = vec![0.0f64; seeds.len()];
     for (p, &r) in input.vertices().iter().zip(&region) {
@@ -214,7 +216,7 @@ fn undo_flipping_moves(output: &TriMesh, anchors: &[[f64; 3]], placed: &mut [[f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use meshgnn_geometry::{grid_plane, icosphere};
+    use meshgnn_geometry::{geodesic_voronoi_regions, grid_plane, icosphere};
 
     fn radius(p: [f32; 3]) -> f64 {
         norm(to_f64(p))

@@ -14,8 +14,8 @@ use crate::error::{Error, Result};
 /// Each input vertex's region among a selection and every region's face quadric.
 #[derive(Clone, Debug)]
 pub struct SeedRegions {
-    region: Vec<u32>,
-    quadrics: Vec<Quadric>,
+    pub(super) region: Vec<u32>,
+    pub(super) quadrics: Vec<Quadric>,
 }
 
 impl SeedRegions {
@@ -101,11 +101,7 @@ pub(super) fn add_to_region(quadrics: &mut [Quadric], region: &[u32], v: u32, qu
 
 /// Per region, the area-weighted plane quadrics of every face at each of its corners in the
 /// region.
-pub(super) fn region_face_quadrics(
-    input: &TriMesh,
-    region: &[u32],
-    regions: usize,
-) -> Vec<Quadric> {
+fn region_face_quadrics(input: &TriMesh, region: &[u32], regions: usize) -> Vec<Quadric> {
     let mut quadrics = vec![Quadric::default(); regions];
     for t in input.triangles() {
         let (normal, point) = face_plane(input, t);

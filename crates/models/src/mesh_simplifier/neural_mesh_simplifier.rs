@@ -507,8 +507,8 @@ mod tests {
             assert_eq!(*v, mesh.vertices()[i as usize]);
         }
         assert!(a.raw_faces >= a.mesh.face_count());
-        // The candidate set stays proportional to the sampled vertices (2 549 for 120 here
-        // from the 16 strongest entries per vertex; the unrestricted product gave 120 050).
+        // The candidate set stays proportional to the sampled vertices (2 123 for 120 here
+        // from the 12 strongest entries per vertex; the unrestricted product gave 120 050).
         let input = MeshInput::new(&mesh, &Device::Cpu).unwrap();
         let pass = m.forward(&input, 120, 4).unwrap();
         assert!(pass.candidates.triangles.len() <= 25 * 120);

@@ -153,6 +153,9 @@ mod tests {
         let map = VarMap::new();
         let vb = VarBuilder::from_varmap(&map, DType::F32, &Device::Cpu);
         let sampler = PointSampler::new(vb, &PointSamplerConfig::default()).unwrap();
+        // Seeded: candle's own initial draw is not, and one run of the suite drew weights
+        // under which seeds 5 and 6 drew the same vertices.
+        crate::spiral::seeded_initialization(&map, 0).unwrap();
         let (x, v, slots) = sphere();
         let a = sampler.sample(&x, &v, &slots, 100, 5).unwrap();
         let b = sampler.sample(&x, &v, &slots, 100, 5).unwrap();

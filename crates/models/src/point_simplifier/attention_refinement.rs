@@ -474,6 +474,9 @@ mod tests {
             gamma_hidden: 6,
         };
         let random = AttentionRefinement::new(vb, &cfg).unwrap();
+        // Seeded weights and fixed features: with candle's unseeded draws, one run of the
+        // suite left this small layer's output all zero and the last check failed.
+        crate::spiral::seeded_initialization(&map, 0).unwrap();
         let zero_phi1 = Linear::new(
             Tensor::zeros((3, 5), DType::F32, &dev).unwrap(),
             Some(Tensor::zeros(3, DType::F32, &dev).unwrap()),
@@ -487,7 +490,10 @@ mod tests {
         .unwrap();
         let pts = cloud();
         let g = refinement_graph(&pts, &[0, 3, 5], 4, &dev).unwrap();
-        let f = Tensor::rand(-1.0f32, 1.0, (pts.len(), 4), &dev).unwrap();
+        let features: Vec<f32> = (0..pts.len() * 4)
+            .map(|i| (i as f32 * 0.37).sin())
+            .collect();
+        let f = Tensor::from_vec(features, (pts.len(), 4), &dev).unwrap();
         let delta: Vec<f32> = att
             .forward(&f, &g)
             .unwrap()
