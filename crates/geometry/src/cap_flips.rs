@@ -132,7 +132,7 @@ fn flip_cap(
     let t = faces[f];
     let (b, a, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
     // Exactly two faces on `ac`, running it in opposite directions.
-    let [(f0, forward0), (f1, forward1)] = edge_faces[&key(a, c)][..] else {
+    let [(f0, forward0), (f1, forward1)] = edge_faces[&edge_key(a, c)][..] else {
         return false;
     };
     if forward0 == forward1 {
@@ -144,7 +144,7 @@ fn flip_cap(
         return false;
     };
     let at = |v: u32| to_f64(vertices[v as usize]);
-    if d == b || on_line(at(d), at(a), at(c)) || edge_faces.contains_key(&key(b, d)) {
+    if d == b || on_line(at(d), at(a), at(c)) || edge_faces.contains_key(&edge_key(b, d)) {
         return false;
     }
     remove_face(edge_faces, f, &faces[f]);
@@ -157,20 +157,23 @@ fn flip_cap(
 }
 
 /// The undirected key of edge `(u, v)`.
-fn key(u: u32, v: u32) -> (u32, u32) {
+pub(crate) fn edge_key(u: u32, v: u32) -> (u32, u32) {
     (u.min(v), u.max(v))
 }
 
 fn add_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
     for i in 0..3 {
         let (u, v) = (t[i], t[(i + 1) % 3]);
-        edge_faces.entry(key(u, v)).or_default().push((f, u < v));
+        edge_faces
+            .entry(edge_key(u, v))
+            .or_default()
+            .push((f, u < v));
     }
 }
 
 fn remove_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
     for i in 0..3 {
-        let k = key(t[i], t[(i + 1) % 3]);
+        let k = edge_key(t[i], t[(i + 1) % 3]);
         if let Some(list) = edge_faces.get_mut(&k) {
             list.retain(|&(g, _)| g != f);
             if list.is_empty() {

@@ -25,7 +25,7 @@
 use std::collections::HashMap;
 use std::collections::VecDeque;
 
-use crate::cap_flips::is_flat;
+use crate::cap_flips::{edge_key, is_flat};
 use crate::error::{Error, Result};
 use crate::vec3::{dot, sub, to_f64, triangle_cross};
 
@@ -140,6 +140,9 @@ fn orient_along(vertices: &[[f32; 3]], faces: &mut [[u32; 3]], normals: &[[f32; 
 /// are not, by majority (a tie keeps it); a face decided makes its pending neighbours
 /// decidable. Faces with no decided neighbour keep their orientation.
 fn orient_by_neighbours(faces: &mut [[u32; 3]], mut pending: Vec<bool>) {
+    if !pending.contains(&true) {
+        return;
+    }
     let by_edge = faces_by_edge(faces);
     let mut queue: VecDeque<usize> = (0..faces.len()).filter(|&f| pending[f]).collect();
     while let Some(f) = queue.pop_front() {
@@ -167,11 +170,6 @@ fn orient_by_neighbours(faces: &mut [[u32; 3]], mut pending: Vec<bool>) {
         pending[f] = false;
         queue.extend(across.iter().map(|&(_, _, g)| g).filter(|&g| pending[g]));
     }
-}
-
-/// The undirected key of edge `(a, b)`.
-fn edge_key(a: u32, b: u32) -> (u32, u32) {
-    (a.min(b), a.max(b))
 }
 
 /// The directed edges of `t`.
