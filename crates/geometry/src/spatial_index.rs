@@ -830,6 +830,38 @@ mod tests {
     }
 
     #[test]
+    fn graphs_wider_than_a_leaf_equal_brute_force() {
+        // k of a leaf's 8-16 points and more (the face classifier's k = 20): a leaf of at
+        // most k points has no bound of its own and its rows take one walk per point; on
+        // clustered and duplicated points
+        let mut rng = StdRng::seed_from_u64(4);
+        let mut pts = cloud_with_ties(6, 1500);
+        for i in 0..1500 {
+            let c = [(i % 5) as f32, -2.0, 0.5];
+            pts.push(match i % 3 {
+                0 => c,
+                _ => std::array::from_fn(|a| c[a] + rng.random_range(-0.02f32..0.02)),
+            });
+        }
+        let index = SpatialIndex::new(&pts).unwrap();
+        for k in [16, 20, 33, 64] {
+            let g = index.knn_graph(k).unwrap();
+            for (i, p) in pts.iter().enumerate().step_by(11) {
+                let want = brute(&pts, p, k, Some(i as u32));
+                assert_eq!(
+                    g.row(i),
+                    want.iter().map(|x| x.1).collect::<Vec<_>>(),
+                    "k {k} point {i}"
+                );
+                assert_eq!(
+                    &g.squared_distances[i * k..(i + 1) * k],
+                    want.iter().map(|x| x.0).collect::<Vec<_>>()
+                );
+            }
+        }
+    }
+
+    #[test]
     fn graph_rows_of_a_subset_equal_the_whole_graph_and_brute_force() {
         // clustered, duplicated and spread points: leaves take the batched route, the dense
         // duplicate clusters the per-point fallback
