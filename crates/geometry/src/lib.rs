@@ -18,6 +18,7 @@ mod error;
 mod io;
 mod point_cloud;
 mod primitives;
+mod radix_heap;
 mod row_chunked_products;
 mod sparse_cholesky;
 mod tri_mesh;

@@ -19,13 +19,13 @@
 //! (`connected_regions`): a region's piece cut off from its seed would put a dual edge into
 //! faces on both sides of it.
 
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 
 use rayon::prelude::*;
 
 use crate::connected_regions::connected_nearest_seed_regions;
 use crate::error::{Error, Result};
+use crate::radix_heap::RadixHeap;
 use crate::spatial_index::SpatialIndex;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{dot, norm, sub, to_f64};
@@ -41,13 +41,15 @@ pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
     let v = mesh.vertices();
     let mut distance = vec![f64::INFINITY; n];
     // Keys are (distance bits, seed): non-negative f64 order as their bit patterns, and the
-    // seed breaks ties so the partition does not depend on the heap's internals.
-    let mut heap = BinaryHeap::new();
+    // seed breaks ties. A vertex is settled by its least key, and the entries of one key
+    // offer their neighbours only keys no lower, so the partition does not depend on the
+    // order in which entries of equal key pop.
+    let mut heap = RadixHeap::new();
     for (s, &seed) in seeds.iter().enumerate() {
         distance[seed as usize] = 0.0;
-        heap.push(Reverse((0u64, s as u32, seed)));
+        heap.push(0, s as u32, seed);
     }
-    while let Some(Reverse((bits, s, u))) = heap.pop() {
+    while let Some((bits, s, u)) = heap.pop() {
         let d = f64::from_bits(bits);
         if d > distance[u as usize] || region[u as usize] != s {
             continue;
@@ -60,7 +62,7 @@ pub fn geodesic_voronoi_regions(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<u32
             if better {
                 distance[w as usize] = candidate;
                 region[w as usize] = s;
-                heap.push(Reverse((candidate.to_bits(), s, w)));
+                heap.push(candidate.to_bits(), s, w);
             }
         }
     }

@@ -10,6 +10,7 @@
 //! - Incidence is `#V×#F` with value 1 where the vertex is a corner of the face.
 
 use meshgnn_geometry::{TriMesh, edge_topology};
+use rayon::prelude::*;
 
 use crate::{CsrMatrix, Error, Result};
 
@@ -45,7 +46,7 @@ pub fn adjacency_from_edges(n: usize, edges: &[[u32; 2]]) -> Result<CsrMatrix> {
             ]
         })
         .collect();
-    keys.sort_unstable();
+    keys.par_sort_unstable();
     keys.dedup();
     let mut row_offsets = vec![0usize; n + 1];
     for &key in &keys {

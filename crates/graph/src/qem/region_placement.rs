@@ -36,25 +36,29 @@ const ANCHOR_STRENGTH: f64 = 1e-3;
 const MIN_NORMAL_COSINE: f64 = 0.2;
 
 /// The positions of `output`'s vertices after moving each selected vertex `o < seeds.len()`
-/// (which sits at input vertex `seeds[o]`) to its region's quadric optimum (module docs);
-/// the other vertices keep theirs. Errors when `seeds` is longer than `output`'s vertex list
-/// or names a vertex of `input` out of range or twice.
+/// (which sits at input vertex `seeds[o]`) to the quadric optimum of its region in `regions`
+/// (module docs; [`SeedRegions::new`] of `input` and these seeds, which a caller may build
+/// while it chooses the faces); the other vertices keep theirs. Errors when `seeds` is longer
+/// than `output`'s vertex list, does not match the regions, or names a vertex of `input` out
+/// of range or twice.
 ///
 /// ```
 /// use meshgnn_geometry::{TriMesh, icosphere};
-/// use meshgnn_graph::region_quadric_placement;
+/// use meshgnn_graph::{SeedRegions, region_quadric_placement};
 /// // A coarse selection of a sphere's vertices sits on the sphere; its triangles cut inside.
 /// // Placed, the vertices move outwards so the triangles straddle the surface.
 /// let sphere = icosphere(4);
 /// let coarse = icosphere(1);
 /// let seeds: Vec<u32> = (0..coarse.vertex_count() as u32).collect();
-/// let placed = region_quadric_placement(&sphere, &seeds, &coarse)?;
+/// let regions = SeedRegions::new(&sphere, &seeds)?;
+/// let placed = region_quadric_placement(&sphere, regions, &seeds, &coarse)?;
 /// let radius = |p: [f32; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
 /// assert!(placed.iter().all(|&p| radius(p) > 1.0 && radius(p) < 1.1));
 /// # Ok::<(), meshgnn_graph::Error>(())
 /// ```
 pub fn region_quadric_placement(
     input: &TriMesh,
+    regions: SeedRegions,
     seeds: &[u32],
     output: &TriMesh,
 ) -> Result<Vec<[f32; 3]>> {
@@ -69,10 +73,11 @@ pub fn region_quadric_placement(
             ),
         });
     }
+    regions.seed_of_vertex(input, seeds)?;
     let SeedRegions {
         region,
         mut quadrics,
-    } = SeedRegions::new(input, seeds)?;
+    } = regions;
     // The selected positions; the first `seeds.len()` are the anchors of the solves.
     let anchors: Vec<[f64; 3]> = selected.iter().map(|&p| to_f64(p)).collect();
     add_border_quadrics(input, &region, &mut quadrics);
@@ -222,6 +227,10 @@ mod tests {
         norm(to_f64(p))
     }
 
+    fn regions(input: &TriMesh, seeds: &[u32]) -> SeedRegions {
+        SeedRegions::new(input, seeds).unwrap()
+    }
+
     /// Mean |radius − 1| over the points of each face at barycentric steps of 1/8.
     fn mean_radial_error(vertices: &[[f32; 3]], mesh: &TriMesh) -> f64 {
         let (mut sum, mut count) = (0.0, 0.0);
@@ -322,7 +331,8 @@ mod tests {
         let fine = icosphere(5);
         let coarse = icosphere(2);
         let seeds: Vec<u32> = (0..coarse.vertex_count() as u32).collect();
-        let placed = region_quadric_placement(&fine, &seeds, &coarse).unwrap();
+        let placed =
+            region_quadric_placement(&fine, regions(&fine, &seeds), &seeds, &coarse).unwrap();
         for &p in &placed {
             assert!(radius(p) > 1.0 && radius(p) < 1.02, "radius {}", radius(p));
         }
@@ -340,7 +350,8 @@ mod tests {
         let seeds: Vec<u32> = (0..fine.vertex_count() as u32).step_by(5).collect();
         let positions: Vec<[f32; 3]> = seeds.iter().map(|&s| fine.vertices()[s as usize]).collect();
         let output = TriMesh::new(positions.clone(), vec![]).unwrap();
-        let placed = region_quadric_placement(&fine, &seeds, &output).unwrap();
+        let placed =
+            region_quadric_placement(&fine, regions(&fine, &seeds), &seeds, &output).unwrap();
         let region = geodesic_voronoi_regions(&fine, &seeds).unwrap();
         // Within 1e-4 (the pull of the anchor; the grid step is 1/16).
         let on_border = |p: [f32; 3]| {
@@ -388,7 +399,8 @@ mod tests {
             })
             .collect();
         let output = TriMesh::new(seeds.iter().map(|&s| v[s as usize]).collect(), vec![]).unwrap();
-        let placed = region_quadric_placement(&cube, &seeds, &output).unwrap();
+        let placed =
+            region_quadric_placement(&cube, regions(&cube, &seeds), &seeds, &output).unwrap();
         let step = f64::from(extent) / 4.0;
         for (p, &c) in placed.iter().zip(&corners) {
             let miss = norm(sub(to_f64(*p), to_f64(v[c as usize])));
@@ -460,8 +472,8 @@ mod tests {
             let dual = meshgnn_geometry::voronoi_dual_triangles(&input, &seeds).unwrap();
             let corners = seeds.iter().map(|&s| input.vertices()[s as usize]).collect();
             let output = TriMesh::new(corners, dual).unwrap();
-            let placed = region_quadric_placement(&input, &seeds, &output).unwrap();
-            proptest::prop_assert_eq!(&placed, &region_quadric_placement(&input, &seeds, &output).unwrap());
+            let placed = region_quadric_placement(&input, regions(&input, &seeds), &seeds, &output).unwrap();
+            proptest::prop_assert_eq!(&placed, &region_quadric_placement(&input, regions(&input, &seeds), &seeds, &output).unwrap());
             let region = geodesic_voronoi_regions(&input, &seeds).unwrap();
             let anchor = |o: usize| to_f64(output.vertices()[o]);
             for (o, p) in placed.iter().enumerate() {
@@ -503,7 +515,20 @@ mod tests {
     fn too_many_or_repeated_seeds_are_errors() {
         let sphere = icosphere(1);
         let output = TriMesh::new(sphere.vertices()[..2].to_vec(), vec![]).unwrap();
-        assert!(region_quadric_placement(&sphere, &[0, 1, 2], &output).is_err());
-        assert!(region_quadric_placement(&sphere, &[0, 0], &output).is_err());
+        let three = [0, 1, 2];
+        assert!(
+            region_quadric_placement(&sphere, regions(&sphere, &three), &three, &output).is_err()
+        );
+        assert!(SeedRegions::new(&sphere, &[0, 0]).is_err());
+        // Seeds that are not the regions': too few, or one repeated.
+        assert!(
+            region_quadric_placement(&sphere, regions(&sphere, &[0, 1]), &[0], &output).is_err()
+        );
+        assert!(
+            region_quadric_placement(&sphere, regions(&sphere, &[0, 1]), &[0, 0], &output).is_err()
+        );
+        assert!(
+            region_quadric_placement(&sphere, regions(&sphere, &[0, 1]), &[0, 1], &output).is_ok()
+        );
     }
 }

@@ -10,6 +10,7 @@
 
 use candle_core::{D, Tensor};
 use candle_nn::{Linear, Module, VarBuilder};
+use rayon::prelude::*;
 
 use super::{DevConv, DevConvConfig, ExtendedGraph, slot_dot_products};
 use crate::{Error, Result};
@@ -22,10 +23,10 @@ pub struct EdgePredictorConfig {
     /// k of the k-NN graph over the sampled vertices that extends the adjacency (15).
     pub neighbours: usize,
     /// Strongest `A_s` entries per sampled vertex that candidate triangles are built from
-    /// (beyond the thesis, [`ExtendedGraph::strongest_pattern`]; 12: with 8, only 61% of the
-    /// Voronoi-dual triangles were candidates untrained; trained, 12 gives the CD of 16 with
-    /// fewer candidates for the face classifier and 8-16 % less time at 200-872k faces,
-    /// docs/mesh_simplifier_model.md).
+    /// (beyond the thesis, [`ExtendedGraph::strongest_pattern`]; the dual's edges are always
+    /// added, so every dual triangle is a candidate; retrained each time, 10 gives the CD of
+    /// 16 and 12 with fewer candidates for the face classifier, 8 a real-set CD 4 % higher at
+    /// 20 %; docs/mesh_simplifier_model.md, "Ten candidate neighbours").
     pub candidate_neighbours: usize,
 }
 
@@ -34,7 +35,7 @@ impl Default for EdgePredictorConfig {
         Self {
             hidden: 64,
             neighbours: 15,
-            candidate_neighbours: 12,
+            candidate_neighbours: 10,
         }
     }
 }
@@ -125,18 +126,20 @@ impl EdgePrediction {
             .to_vec1()?;
         let pattern = graph.strongest_pattern(&values, self.candidate_neighbours)?;
         let triangles = meshgnn_graph::candidate_triangles(&pattern)?;
-        let mut entries = Vec::with_capacity(triangles.len() * 3);
-        for &[a, b, c] in &triangles {
-            for (u, v) in [(a, b), (a, c), (b, c)] {
-                let index = graph.pair_index(u, v).ok_or_else(|| Error::Invalid {
-                    what: format!("candidate edge ({u}, {v})"),
-                    reason: "missing from the simplified adjacency".into(),
-                })?;
-                entries.push(index as u32);
-            }
-        }
+        let pair_index = |u: u32, v: u32| -> Result<u32> {
+            let index = graph.pair_index(u, v).ok_or_else(|| Error::Invalid {
+                what: format!("candidate edge ({u}, {v})"),
+                reason: "missing from the simplified adjacency".into(),
+            })?;
+            Ok(index as u32)
+        };
+        let entries: Vec<[u32; 3]> = triangles
+            .par_iter()
+            .map(|&[a, b, c]| Ok([pair_index(a, b)?, pair_index(a, c)?, pair_index(b, c)?]))
+            .collect::<Result<_>>()?;
         let count = triangles.len();
-        let entries = Tensor::from_vec(entries, count * 3, self.adjacency.device())?;
+        let entries =
+            Tensor::from_vec(entries.into_flattened(), count * 3, self.adjacency.device())?;
         let prior = self
             .adjacency
             .index_select(&entries, 0)?

@@ -213,25 +213,27 @@ impl ExtendedGraph {
     /// edges every dual triangle is a candidate, also where a sampled vertex of a small mesh
     /// has more than `k` strong links).
     pub fn strongest_pattern(&self, values: &[f32], k: usize) -> Result<CsrMatrix> {
-        let mut kept: Vec<(u32, u32, f32)> = Vec::new();
-        let mut start = 0;
-        while start < self.pairs.len() {
-            let a = self.pairs[start][0];
-            let end = start + self.pairs[start..].partition_point(|p| p[0] == a);
-            let mut row: Vec<usize> = (start..end).collect();
-            row.sort_by(|&x, &y| values[y].total_cmp(&values[x]).then(x.cmp(&y)));
-            for &e in row.iter().take(k) {
-                let b = self.pairs[e][1];
-                kept.push((a, b, 1.0));
-                kept.push((b, a, 1.0));
-            }
-            start = end;
-        }
+        let mut row_starts = vec![0];
+        row_starts
+            .extend((1..self.pairs.len()).filter(|&e| self.pairs[e][0] != self.pairs[e - 1][0]));
+        row_starts.push(self.pairs.len());
+        let mut kept: Vec<(u32, u32, f32)> = row_starts
+            .par_windows(2)
+            .flat_map_iter(|span| {
+                let mut row: Vec<usize> = (span[0]..span[1]).collect();
+                row.sort_by(|&x, &y| values[y].total_cmp(&values[x]).then(x.cmp(&y)));
+                row.truncate(k);
+                row.into_iter().flat_map(|e| {
+                    let [a, b] = self.pairs[e];
+                    [(a, b, 1.0), (b, a, 1.0)]
+                })
+            })
+            .collect();
         for &(a, b) in &self.dual_edges {
             kept.push((a, b, 1.0));
             kept.push((b, a, 1.0));
         }
-        kept.sort_by_key(|t| (t.0, t.1));
+        kept.par_sort_unstable_by_key(|t| (t.0, t.1));
         kept.dedup_by_key(|t| (t.0, t.1));
         let m = self.sampled.len();
         Ok(CsrMatrix::from_triplets(m, m, &kept)?)

@@ -10,6 +10,7 @@
 
 mod candidate_features;
 mod checkpoint;
+mod column_concat;
 mod dev_conv;
 mod dual_targets;
 mod edge_predictor;
@@ -34,6 +35,7 @@ mod tri_conv;
 
 pub use candidate_features::{CANDIDATE_FEATURES, candidate_features};
 pub use checkpoint::NEURAL_MESH_SIMPLIFIER_NAME;
+pub use column_concat::column_concat;
 pub use dev_conv::{DevConv, DevConvConfig};
 pub use dual_targets::DualTargets;
 pub use edge_predictor::{CandidateFaces, EdgePrediction, EdgePredictor, EdgePredictorConfig};

@@ -12,7 +12,7 @@
 use candle_core::Tensor;
 use candle_nn::{Linear, Module, VarBuilder};
 
-use super::{FaceGraph, link_message_mean};
+use super::{FaceGraph, column_concat, link_message_mean};
 use crate::{Error, Result};
 
 /// Widths of a TriConv layer.
@@ -80,8 +80,7 @@ impl TriConv {
         // layer allocates its own.
         let mean = {
             let descriptors = graph.descriptors.to_dtype(features.dtype())?;
-            let projected =
-                Tensor::cat(&[&descriptors, features], 1)?.matmul(&first.weight().t()?)?;
+            let projected = column_concat(&descriptors, features)?.matmul(&first.weight().t()?)?;
             link_message_mean(&projected, &bias, &graph.neighbours)?
         };
         Ok(self.mlp[1].forward(&mean)?)
