@@ -26,7 +26,7 @@ pub struct EdgePredictorConfig {
     /// (beyond the thesis, [`ExtendedGraph::strongest_pattern`]; the dual's edges are always
     /// added, so every dual triangle is a candidate; retrained each time, 10 gives the CD of
     /// 16 and 12 with fewer candidates for the face classifier, 8 a real-set CD 4 % higher at
-    /// 20 %; docs/mesh_simplifier_model.md, "Ten candidate neighbours").
+    /// 20 %; docs/mesh_simplifier_model.md, "Sequential stages off the critical path").
     pub candidate_neighbours: usize,
 }
 
