@@ -34,9 +34,10 @@ pub use error::{Error, Result};
 pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
 pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};
 pub use qem::{
-    Decimation, DecimationOptions, QemVertices, Quadric, SeedRegions, StopReason, Target, decimate,
-    decimate_keeping, decimate_with_progress, qem_vertices, region_quadric_placement,
-    region_quadric_vertices, region_seed_exchange,
+    Decimation, DecimationOptions, QemVertices, Quadric, SeedRegions, StopReason, Target,
+    WeldedMesh, decimate, decimate_keeping, decimate_with_progress, qem_vertices,
+    region_quadric_placement, region_quadric_vertices, region_seed_exchange,
+    weld_coincident_vertices,
 };
 
 pub use balanced_sampling::balanced_sampling;

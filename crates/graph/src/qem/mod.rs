@@ -34,3 +34,4 @@ pub use region_placement::{region_quadric_placement, region_quadric_vertices};
 pub use seed_exchange::region_seed_exchange;
 pub use seed_regions::SeedRegions;
 pub use vertex_selection::{QemVertices, qem_vertices};
+pub use weld_by_position::{WeldedMesh, weld_coincident_vertices};

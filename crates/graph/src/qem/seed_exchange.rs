@@ -22,18 +22,13 @@
 //! the moved seeds on their new regions' best-fitting vertices.
 
 use meshgnn_geometry::vec3::to_f64;
-use meshgnn_geometry::{TriMesh, connected_components};
+use meshgnn_geometry::{MIN_COMPONENT_SEEDS, TriMesh, connected_components};
 
 use super::seed_regions::SeedRegions;
 use crate::error::Result;
 
 /// Share of a region's fit a split is estimated to save.
 const SPLIT_SAVING: f64 = 0.5;
-
-/// Seeds a connected component keeps at least, where it had them: the fewest vertices of a
-/// closed surface (a tetrahedron), so that no part of the input loses its faces. A component
-/// with fewer neither gives nor takes one: its regions' fits measure no faces of the output.
-const MIN_COMPONENT_SEEDS: usize = 4;
 
 /// `seeds` after one round of exchanges (module docs) on `regions` (built from these seeds
 /// or from seeds each inside the region it names): the seeds of the regions cheapest to drop

@@ -1,12 +1,17 @@
 //! Welding of vertices that share an exact position (unwelded triangle soups, as STL-like
-//! exporters write them, and meshes split on attribute seams), before QEM decimation.
+//! exporters write them, meshes split on attribute seams, patch models whose patches meet
+//! at copied vertices), before QEM decimation and before the neural simplifier
+//! ([`weld_coincident_vertices`]).
 //!
 //! Vertices are merged when their positions are bit-identical (with `-0.0 == 0.0`) and, when
 //! texture coordinates are given, their UVs are bit-identical too: vertices at one position with
 //! different UVs stay apart and are flagged as *seam* vertices, linked to their twins, which
 //! decimation moves only together so that textures do not tear.
 
+use meshgnn_geometry::TriMesh;
 use rayon::prelude::*;
+
+use crate::Result;
 
 /// The result of [`weld_by_position`].
 #[derive(Debug, Clone, PartialEq)]
@@ -115,6 +120,54 @@ pub(crate) fn weld_by_position(vertices: &[[f32; 3]], uvs: Option<&[[f32; 2]]>) 
     }
 }
 
+/// A mesh with its coincident vertices merged ([`weld_coincident_vertices`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WeldedMesh {
+    /// One vertex per distinct position, in the order of first occurrence; the faces
+    /// renumbered, those left with a repeated corner or on the same three vertices as an
+    /// earlier face dropped. Other attributes are not carried.
+    pub mesh: TriMesh,
+    /// `#W`: the input vertex each welded vertex stands for (its first at that position).
+    pub representatives: Vec<u32>,
+}
+
+/// Merges the vertices of `mesh` with bit-identical positions (`-0.0 == 0.0`), so that
+/// surfaces stored as separate patches or as a triangle soup are connected where they
+/// meet; `None` when every position is already distinct. O(V log V + F); deterministic.
+///
+/// ```
+/// use meshgnn_geometry::TriMesh;
+/// use meshgnn_graph::weld_coincident_vertices;
+/// // Two triangles sharing an edge, stored with the edge's vertices copied.
+/// let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+/// let mesh = TriMesh::new(v, vec![[0, 1, 2], [3, 5, 4]])?;
+/// let welded = weld_coincident_vertices(&mesh)?.expect("two positions are copied");
+/// assert_eq!(welded.mesh.triangles(), &[[0, 1, 2], [1, 3, 2]]);
+/// assert_eq!(welded.representatives, vec![0, 1, 2, 5]);
+/// assert_eq!(weld_coincident_vertices(&welded.mesh)?, None);
+/// # Ok::<(), meshgnn_graph::Error>(())
+/// ```
+pub fn weld_coincident_vertices(mesh: &TriMesh) -> Result<Option<WeldedMesh>> {
+    let welding = weld_by_position(mesh.vertices(), None);
+    if !welding.merged_any() {
+        return Ok(None);
+    }
+    let positions = welding
+        .representatives
+        .iter()
+        .map(|&r| mesh.vertices()[r as usize])
+        .collect();
+    let triangles = mesh
+        .triangles()
+        .par_iter()
+        .map(|t| t.map(|v| welding.map[v as usize]))
+        .collect();
+    Ok(Some(WeldedMesh {
+        mesh: TriMesh::new(positions, triangles)?.without_degenerate_faces(),
+        representatives: welding.representatives,
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,5 +192,36 @@ mod tests {
         assert_eq!(w.map, vec![0, 1, 0, 2, 3]);
         assert_eq!(w.seam, vec![false, true, true, false]);
         assert_eq!(w.twin, vec![0, 2, 1, 3]);
+    }
+
+    #[test]
+    fn welded_patches_share_their_seam_and_lose_collapsed_faces() {
+        // A unit square as two patches (copied seam vertices 1 = 3 and 2 = 4), plus a sliver
+        // whose corners 2 and 6 coincide and a copy of the first face over copied vertices.
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-0.0, 0.0, 0.0],
+        ];
+        let faces = vec![[0, 1, 2], [3, 5, 4], [2, 6, 5], [7, 3, 4]];
+        let welded = weld_coincident_vertices(&TriMesh::new(v, faces).unwrap())
+            .unwrap()
+            .unwrap();
+        assert_eq!(welded.representatives, vec![0, 1, 2, 5]);
+        assert_eq!(
+            welded.mesh.vertices(),
+            &[
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0]
+            ]
+        );
+        assert_eq!(welded.mesh.triangles(), &[[0, 1, 2], [1, 3, 2]]);
     }
 }

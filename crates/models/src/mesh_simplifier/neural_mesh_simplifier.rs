@@ -1,6 +1,8 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
-//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; then, in
+//! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; every
+//! connected component that holds a seed topped up to a tetrahedron's four, so that no part
+//! loses its faces: [`component_seed_floor`]; then, in
 //! rounds on one geodesic partition each, each seed moved to the vertex of its region that
 //! fits the region's faces best, [`region_quadric_vertices`], and, in the first
 //! [`SEED_EXCHANGE_ROUNDS`], seeds moved from where they are cheapest to drop to where the
@@ -18,6 +20,10 @@
 //! faces are flipped away ([`meshgnn_geometry::flip_caps`]).
 //!
 //! # Conventions
+//! - [`NeuralMeshSimplifier::simplify`] first welds the vertices at one position
+//!   ([`weld_coincident_vertices`]), as QEM does: a model stored as patches that meet at
+//!   copied vertices (the teapot of data-fixtures has 32) is one surface to the geodesic
+//!   partition and the network, not many small pieces.
 //! - The mesh is scaled to the unit sphere ([`meshgnn_geometry::unit_sphere_normalization`])
 //!   before the network sees it; outputs are in the input's units.
 //! - The simplified mesh keeps all sampled vertices (about `M`) in draw order (a vertex no
@@ -29,12 +35,13 @@ use std::panic::resume_unwind;
 use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_geometry::{
-    TriMesh, boundary_loops, close_cracks, fill_holes, flip_caps, nearest_seed_dual_triangles,
-    select_manifold_faces, unit_sphere_normalization, vertex_normals,
+    TriMesh, boundary_loops, close_cracks, component_seed_floor, fill_holes, flip_caps,
+    nearest_seed_dual_triangles, select_manifold_faces, unit_sphere_normalization, vertex_normals,
 };
 use meshgnn_graph::{
-    CsrMatrix, SeedRegions, Target, hilbert_order, region_quadric_placement,
+    CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order, region_quadric_placement,
     region_quadric_vertices, region_seed_exchange, systematic_sampling, vertex_adjacency,
+    weld_coincident_vertices,
 };
 use meshgnn_losses::metrics::watertightness;
 
@@ -251,6 +258,7 @@ impl NeuralMeshSimplifier {
             seed,
         )?;
         let mut sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
+        sampled.indices = component_seed_floor(&input.surface, &sampled.indices);
         for round in 0..=SEED_EXCHANGE_ROUNDS {
             // One partition per round: the settled seeds stay inside their regions.
             let regions = SeedRegions::new(&input.surface, &sampled.indices)?;
@@ -368,9 +376,9 @@ impl NeuralMeshSimplifier {
         Ok(along_curve.into_iter().map(|r| order[r as usize]).collect())
     }
 
-    /// [`Self::simplify`] aiming at a face count or ratio ([`Target::vertex_count`] vertices):
-    /// what the apps call. Refuses a mesh of fewer than [`MIN_NEURAL_FACES`] faces.
-    /// `progress(fraction in [0, 1])` follows the stages.
+    /// [`Self::simplify`] aiming at a face count or ratio ([`Target::vertex_count`] of the
+    /// welded mesh): what the apps call. Refuses a mesh of fewer than [`MIN_NEURAL_FACES`]
+    /// faces once welded. `progress(fraction in [0, 1])` follows the stages.
     pub fn simplify_to(
         &self,
         mesh: &TriMesh,
@@ -379,19 +387,24 @@ impl NeuralMeshSimplifier {
         options: &NeuralSimplifyOptions,
         progress: &mut dyn FnMut(f64),
     ) -> Result<NeuralSimplification> {
-        if mesh.face_count() < MIN_NEURAL_FACES {
+        let welded = weld_coincident_vertices(mesh)?;
+        let surface = welded.as_ref().map_or(mesh, |w| &w.mesh);
+        if surface.face_count() < MIN_NEURAL_FACES {
             return Err(Error::Invalid {
-                what: format!("{} faces", mesh.face_count()),
+                what: format!("{} faces", surface.face_count()),
                 reason: format!(
                     "the neural simplifier needs at least {MIN_NEURAL_FACES} (its training \
                      meshes have thousands); use the qem method"
                 ),
             });
         }
-        self.simplify_with_progress(mesh, target.vertex_count(mesh), seed, options, progress)
+        let target = target.vertex_count(surface);
+        self.simplify_welded(mesh, welded.as_ref(), target, seed, options, progress)
     }
 
-    /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤ N`): faces with `p_t > 0.5`,
+    /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤` its distinct positions):
+    /// vertices at one position welded first ([`weld_coincident_vertices`]: a model made of
+    /// patches is simplified as one surface), faces with `p_t > 0.5`,
     /// then the manifold pass (module docs), the vertices placed unless
     /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
     /// closed with rejected candidates and every hole of at most `k` edges filled; last, cap
@@ -418,11 +431,28 @@ impl NeuralMeshSimplifier {
         options: &NeuralSimplifyOptions,
         progress: &mut dyn FnMut(f64),
     ) -> Result<NeuralSimplification> {
+        let welded = weld_coincident_vertices(mesh)?;
+        self.simplify_welded(mesh, welded.as_ref(), target, seed, options, progress)
+    }
+
+    /// [`Self::simplify_with_progress`] on `mesh` as `welded` (`None`: nothing to weld).
+    fn simplify_welded(
+        &self,
+        input_mesh: &TriMesh,
+        welded: Option<&WeldedMesh>,
+        target: usize,
+        seed: u64,
+        options: &NeuralSimplifyOptions,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<NeuralSimplification> {
+        let mesh = welded.map_or(input_mesh, |w| &w.mesh);
         let n = mesh.vertex_count();
         if !(3..=n).contains(&target) {
             return Err(Error::Invalid {
                 what: "target vertex count".into(),
-                reason: format!("must be in 3..={n} for {n} vertices, got {target}"),
+                reason: format!(
+                    "must be in 3..={n} for {n} distinct vertex positions, got {target}"
+                ),
             });
         }
         let input = MeshInput::new(mesh, &self.device)?;
@@ -480,6 +510,13 @@ impl NeuralMeshSimplifier {
         };
         let mesh = flip_caps(&mesh)?;
         progress(1.0);
+        let vertex_map = match welded {
+            None => vertex_map,
+            Some(w) => vertex_map
+                .iter()
+                .map(|&v| w.representatives[v as usize])
+                .collect(),
+        };
         Ok(NeuralSimplification {
             wa: watertightness(&mesh),
             holes: boundary_loops(&mesh).len(),
@@ -587,6 +624,47 @@ mod tests {
             }
         }
         assert!(outwards >= 60, "{outwards} of 120 moved outwards");
+    }
+
+    #[test]
+    fn a_mesh_stored_as_patches_simplifies_as_the_welded_surface() {
+        // The sphere's faces east of its centre get copies of their vertices: two patches
+        // that meet at copied vertices along a great circle.
+        let m = model();
+        let sphere = offset_sphere();
+        let mut vertices = sphere.vertices().to_vec();
+        let mut copy_of = vec![None; vertices.len()];
+        let faces: Vec<[u32; 3]> = sphere
+            .triangles()
+            .iter()
+            .map(|t| {
+                let east = t.iter().map(|&v| vertices[v as usize][0]).sum::<f32>() > 21.0;
+                if !east {
+                    return *t;
+                }
+                t.map(|v| {
+                    *copy_of[v as usize].get_or_insert_with(|| {
+                        vertices.push(vertices[v as usize]);
+                        vertices.len() as u32 - 1
+                    })
+                })
+            })
+            .collect();
+        let patches = TriMesh::new(vertices, faces).unwrap();
+        let options = NeuralSimplifyOptions {
+            keep_positions: true,
+            ..Default::default()
+        };
+        let whole = m.simplify(&sphere, 120, 4, &options).unwrap();
+        let patched = m.simplify(&patches, 120, 4, &options).unwrap();
+        assert_eq!(patched.mesh, whole.mesh);
+        assert_eq!(patched.vertex_map, whole.vertex_map);
+        assert!(
+            patched
+                .vertex_map
+                .iter()
+                .all(|&v| (v as usize) < sphere.vertex_count())
+        );
     }
 
     #[test]
