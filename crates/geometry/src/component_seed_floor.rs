@@ -20,8 +20,10 @@ pub const MIN_COMPONENT_SEEDS: usize = 5;
 /// `seeds` followed, for every connected component of `mesh` that holds between one and
 /// [`MIN_COMPONENT_SEEDS`]` − 1` of them, by its vertices farthest from its seeds (farthest
 /// point sampling in space, the first in index order on a tie) until it holds
-/// `MIN_COMPONENT_SEEDS` or all its vertices; components in the order of their label.
-/// Components without a seed stay without. O(V) plus O(V_c) per added seed.
+/// `MIN_COMPONENT_SEEDS` or all its vertices; components from the largest (most vertices;
+/// the lower label on a tie), at most `max_added` seeds in all, so that a cloud of separate
+/// triangles is not turned into all its vertices. Components without a seed stay without.
+/// O(V + F + S + C log C) plus O(V_c) per added seed.
 ///
 /// ```
 /// use meshgnn_geometry::{TriMesh, component_seed_floor, icosphere};
@@ -34,13 +36,17 @@ pub const MIN_COMPONENT_SEEDS: usize = 5;
 ///         .chain(sphere.triangles().iter().map(|t| t.map(|v| v + n)))
 ///         .collect(),
 /// )?;
-/// let floored = component_seed_floor(&two, &[0]);
+/// let floored = component_seed_floor(&two, &[0], 10);
 /// assert_eq!(floored.len(), meshgnn_geometry::MIN_COMPONENT_SEEDS);
 /// assert!(floored.iter().all(|&v| v < n));
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
-pub fn component_seed_floor(mesh: &TriMesh, seeds: &[u32]) -> Vec<u32> {
+pub fn component_seed_floor(mesh: &TriMesh, seeds: &[u32], max_added: usize) -> Vec<u32> {
     let (count, label) = connected_components(mesh);
+    let mut size = vec![0usize; count];
+    for &l in label.iter().filter(|&&l| l != UNREFERENCED) {
+        size[l as usize] += 1;
+    }
     let mut held = vec![0usize; count];
     for &s in seeds {
         if let Some(c) = component_of(&label, s) {
@@ -51,11 +57,17 @@ pub fn component_seed_floor(mesh: &TriMesh, seeds: &[u32]) -> Vec<u32> {
     if !(0..count).any(short) {
         return seeds.to_vec();
     }
-    // The vertices of the short components, grouped by component in index order.
+    // The vertices and the seeds of the short components, grouped by component.
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); count];
+    let mut own_seeds: Vec<Vec<u32>> = vec![Vec::new(); count];
     for v in 0..label.len() as u32 {
         if let Some(c) = component_of(&label, v).filter(|&c| short(c)) {
             members[c].push(v);
+        }
+    }
+    for &s in seeds {
+        if let Some(c) = component_of(&label, s).filter(|&c| short(c)) {
+            own_seeds[c].push(s);
         }
     }
     let position = |v: u32| to_f64(mesh.vertices()[v as usize]);
@@ -63,20 +75,26 @@ pub fn component_seed_floor(mesh: &TriMesh, seeds: &[u32]) -> Vec<u32> {
         let d = sub(position(a), position(b));
         d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
     };
+    let mut order: Vec<usize> = (0..count).filter(|&c| short(c)).collect();
+    order.sort_unstable_by_key(|&c| (std::cmp::Reverse(size[c]), c));
     let mut out = seeds.to_vec();
-    for (c, vertices) in members.iter().enumerate().filter(|(_, m)| !m.is_empty()) {
+    let limit = seeds.len() + max_added;
+    for c in order {
+        let vertices = &members[c];
         let mut nearest: Vec<f64> = vertices
             .iter()
             .map(|&v| {
-                seeds
+                own_seeds[c]
                     .iter()
-                    .filter(|&&s| component_of(&label, s) == Some(c))
                     .map(|&s| squared_distance(v, s))
                     .fold(f64::INFINITY, f64::min)
             })
             .collect();
         let want = MIN_COMPONENT_SEEDS.min(vertices.len());
         for _ in held[c]..want {
+            if out.len() == limit {
+                return out;
+            }
             // The first vertex at the largest distance; 0 once every vertex is a seed.
             let (far, &d) = nearest
                 .iter()
@@ -129,17 +147,25 @@ mod tests {
         // One seed at the square's corner (0, 0): the opposite corner (1, 1) is farthest,
         // then the two other corners, (1, 0) first in index order, then the centre. The
         // tetrahedron has none and stays without.
-        assert_eq!(component_seed_floor(&mesh, &[0]), vec![0, 24, 4, 20, 12]);
+        assert_eq!(component_seed_floor(&mesh, &[0], 9), vec![0, 24, 4, 20, 12]);
         // Three corners and the centre: the fourth corner, √½ from the centre. Two in the
         // tetrahedron, (4, 0, 0) and (3, 1, 0): (3, 0, 1) is √2 from both, then (3, 0, 0),
         // 1 from both; it has no fifth vertex.
+        let seeds = [0, 12, 24, 4, 26, 27];
         assert_eq!(
-            component_seed_floor(&mesh, &[0, 12, 24, 4, 26, 27]),
+            component_seed_floor(&mesh, &seeds, 3),
             vec![0, 12, 24, 4, 26, 27, 20, 28, 25]
         );
+        // At most `max_added`, larger components first: the square (25 vertices) before
+        // the tetrahedron (4).
+        assert_eq!(
+            component_seed_floor(&mesh, &seeds, 2),
+            vec![0, 12, 24, 4, 26, 27, 20, 28]
+        );
+        assert_eq!(component_seed_floor(&mesh, &seeds, 0), seeds);
         // Every component at the floor (or without seeds): unchanged.
         let full = [3, 7, 11, 15, 19, 25, 26, 27, 28];
-        assert_eq!(component_seed_floor(&mesh, &full), full);
+        assert_eq!(component_seed_floor(&mesh, &full, 9), full);
     }
 
     #[test]
@@ -150,6 +176,6 @@ mod tests {
         )
         .unwrap();
         // Vertex 3 is used by no face: part of no component, kept as given.
-        assert_eq!(component_seed_floor(&mesh, &[1, 3]), vec![1, 3, 2, 0]);
+        assert_eq!(component_seed_floor(&mesh, &[1, 3], 9), vec![1, 3, 2, 0]);
     }
 }

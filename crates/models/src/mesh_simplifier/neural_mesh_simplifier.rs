@@ -258,7 +258,8 @@ impl NeuralMeshSimplifier {
             seed,
         )?;
         let mut sampled = with_island_seeds(drawn, &input.surface, target, seed)?;
-        sampled.indices = component_seed_floor(&input.surface, &sampled.indices);
+        // The floor at most doubles the draw (a cloud of separate triangles stays a draw).
+        sampled.indices = component_seed_floor(&input.surface, &sampled.indices, target);
         for round in 0..=SEED_EXCHANGE_ROUNDS {
             // One partition per round: the settled seeds stay inside their regions.
             let regions = SeedRegions::new(&input.surface, &sampled.indices)?;
