@@ -6,7 +6,7 @@
 
 use crate::connected_components::{UNREFERENCED, connected_components};
 use crate::tri_mesh::TriMesh;
-use crate::vec3::{sub, to_f64};
+use crate::vec3::squared_distance_f64;
 
 /// Kept vertices a connected component holds at least, where it holds any. A closed surface
 /// needs four (a tetrahedron), but on an elongated part (a leg) four farthest points lie
@@ -70,10 +70,8 @@ pub fn component_seed_floor(mesh: &TriMesh, seeds: &[u32], max_added: usize) -> 
             own_seeds[c].push(s);
         }
     }
-    let position = |v: u32| to_f64(mesh.vertices()[v as usize]);
     let squared_distance = |a: u32, b: u32| {
-        let d = sub(position(a), position(b));
-        d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+        squared_distance_f64(&mesh.vertices()[a as usize], &mesh.vertices()[b as usize])
     };
     let mut order: Vec<usize> = (0..count).filter(|&c| short(c)).collect();
     order.sort_unstable_by_key(|&c| (std::cmp::Reverse(size[c]), c));

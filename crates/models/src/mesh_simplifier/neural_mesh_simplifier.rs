@@ -1,10 +1,11 @@
 //! The neural mesh simplifier end to end (thesis ch. 6.3, Figure 6.2): the point sampler draws
 //! `M` vertices (beyond the thesis, a seed added on every sizeable piece of the input cut off
 //! from its nearest seed, the draw shortened by as many: [`with_island_seeds`]; every
-//! connected component that holds a seed topped up to [`meshgnn_geometry::MIN_COMPONENT_SEEDS`], so that no
-//! part loses its faces: [`component_seed_floor`]; then, in
-//! rounds on one geodesic partition each, each seed moved to the vertex of its region that
-//! fits the region's faces best, [`region_quadric_vertices`], and, in the first
+//! connected component that holds a seed topped up to
+//! [`meshgnn_geometry::MIN_COMPONENT_SEEDS`], so that no part loses its faces:
+//! [`component_seed_floor`]; then, in rounds on one geodesic partition each, each seed moved
+//! to the vertex of its region that fits the region's faces best, [`region_quadric_vertices`],
+//! and, in the first
 //! [`SEED_EXCHANGE_ROUNDS`], seeds moved from where they are cheapest to drop to where the
 //! surface fits its regions worst, [`region_seed_exchange`]), the edge predictor connects
 //! them (`A_s`) and proposes candidate triangles, the face classifier scores each.
