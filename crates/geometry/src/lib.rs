@@ -30,6 +30,7 @@ mod cap_flips;
 mod component_seed_floor;
 mod connected_components;
 mod connected_regions;
+mod convex_hull;
 mod cotangent_laplacian;
 mod count_bounds;
 mod crack_closing;
@@ -51,6 +52,7 @@ mod mesh_report;
 mod non_manifold_edges;
 mod normalization;
 mod pca_normals;
+mod small_part_hulls;
 mod spatial_index;
 mod surface_sampling;
 mod symmetric_eigen3;
@@ -80,6 +82,7 @@ pub use cap_flips::{CAP_RELATIVE_HEIGHT, flip_caps};
 pub use component_seed_floor::{MIN_COMPONENT_SEEDS, component_seed_floor};
 pub use connected_components::{UNREFERENCED, connected_components};
 pub use connected_regions::{connected_nearest_seed_regions, island_seeds};
+pub use convex_hull::convex_hull;
 pub use cotangent_laplacian::cotangent_laplacian;
 pub use count_bounds::{MAX_SURFACE_SAMPLES, check_count};
 pub use crack_closing::close_cracks;
@@ -110,6 +113,7 @@ pub use mesh_report::{MeshReport, mesh_report};
 pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
+pub use small_part_hulls::{MAX_HULL_AREA_RATIO, hull_small_open_parts};
 pub use spatial_index::{
     DEFAULT_LEAF_SIZE, Neighbours, SpatialIndex, SpatialNode, box_squared_distance,
     squared_distance,
