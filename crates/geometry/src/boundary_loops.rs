@@ -1,6 +1,8 @@
 //! Ordered boundary loops: the chains of edges that have exactly one incident face.
 //! Holes in a scan, the rim of an open surface, and cracks in a simplified mesh show up here.
 
+use std::collections::{HashMap, HashSet};
+
 use crate::TriMesh;
 use crate::edge_topology::{EdgeTopology, edge_topology};
 
@@ -70,6 +72,36 @@ pub(crate) fn boundary_loops_in(topology: &EdgeTopology) -> Vec<Vec<u32>> {
     loops
 }
 
+/// For each of `vertices`, whether it ends a border edge of `mesh` (an edge of one face): one
+/// pass over the faces counting only the edges at those vertices, O(F + n) whatever the
+/// boundary's size. Faces with a repeated corner are skipped, as in [`boundary_loops`].
+///
+/// ```
+/// use meshgnn_geometry::{grid_plane, on_border};
+/// // The 2 × 2 grid: its middle vertex 4 is inside, its corner 0 on the border.
+/// assert_eq!(on_border(&grid_plane(2, 2), &[4, 0]), vec![false, true]);
+/// ```
+pub fn on_border(mesh: &TriMesh, vertices: &[u32]) -> Vec<bool> {
+    let asked: HashSet<u32> = vertices.iter().copied().collect();
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for &[a, b, c] in mesh.triangles() {
+        if a == b || b == c || a == c {
+            continue;
+        }
+        for (x, y) in [(a, b), (b, c), (c, a)] {
+            if asked.contains(&x) || asked.contains(&y) {
+                *uses.entry((x.min(y), x.max(y))).or_default() += 1;
+            }
+        }
+    }
+    let border: HashSet<u32> = uses
+        .into_iter()
+        .filter(|&(_, n)| n == 1)
+        .flat_map(|((x, y), _)| [x, y])
+        .collect();
+    vertices.iter().map(|v| border.contains(v)).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -92,6 +124,25 @@ mod tests {
             area += f64::from(a[0] * b[1] - a[1] * b[0]) / 2.0;
         }
         assert!((area - 1.0).abs() < 1e-6, "{area}");
+    }
+
+    #[test]
+    fn border_vertices_of_a_cube_with_a_hole_are_the_hole_corners() {
+        let (v, f, ..) = subdivided_cube(3).into_parts();
+        let hole = f[0];
+        let open = TriMesh::new(v, f[1..].to_vec()).unwrap();
+        let all: Vec<u32> = (0..open.vertex_count() as u32).collect();
+        let flags = on_border(&open, &all);
+        let expected: Vec<bool> = all.iter().map(|v| hole.contains(v)).collect();
+        assert_eq!(flags, expected);
+        // An edge of three faces is not a border; a repeated corner makes no edge.
+        let fan = TriMesh::new(
+            vec![[0.0; 3]; 5],
+            vec![[0, 1, 2], [0, 1, 3], [0, 1, 4], [2, 2, 3]],
+        )
+        .unwrap();
+        assert_eq!(on_border(&fan, &[0, 1, 2]), vec![true, true, true]);
+        assert_eq!(on_border(&fan, &[]), Vec::<bool>::new());
     }
 
     #[test]

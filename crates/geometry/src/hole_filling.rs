@@ -41,6 +41,47 @@ pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
+    fill(mesh, max_edges, &[], true)
+}
+
+/// [`fill_holes`] without new vertices, leaving open every hole with a corner `v` where
+/// `kept_open[v]` (vertices past its end are not), every hole no triangulation of its own
+/// corners closes, and every hole whose patch would repeat a face on the same corners (the rim
+/// of a lone face or of two faces on an edge: filled, a flat two-sided pillow): a simplifier
+/// closes the cracks it made, keeps the input's borders, and keeps its vertex count.
+///
+/// ```
+/// use meshgnn_geometry::{boundary_loops, fill_holes_away_from, icosphere, TriMesh};
+/// let sphere = icosphere(2);
+/// let mut faces = sphere.triangles().to_vec();
+/// let hole = faces.pop().unwrap();
+/// let open = TriMesh::new(sphere.vertices().to_vec(), faces)?;
+/// let mut kept_open = vec![false; sphere.vertex_count()];
+/// assert!(boundary_loops(&fill_holes_away_from(&open, 30, &kept_open)?).is_empty());
+/// kept_open[hole[0] as usize] = true;
+/// assert_eq!(boundary_loops(&fill_holes_away_from(&open, 30, &kept_open)?).len(), 1);
+/// // A lone face is left: its patch would be the same face turned over.
+/// let lone = TriMesh::new(sphere.vertices().to_vec(), vec![hole])?;
+/// assert_eq!(fill_holes_away_from(&lone, 30, &[])?.face_count(), 1);
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn fill_holes_away_from(
+    mesh: &TriMesh,
+    max_edges: usize,
+    kept_open: &[bool],
+) -> Result<TriMesh> {
+    fill(mesh, max_edges, kept_open, false)
+}
+
+/// The filling of [`fill_holes`] and [`fill_holes_away_from`]: with `centre_fans` a hole no
+/// triangulation of its corners closes gets a vertex of its own; without, it stays open, as
+/// does a hole whose patch repeats an existing face's corners.
+fn fill(
+    mesh: &TriMesh,
+    max_edges: usize,
+    kept_open: &[bool],
+    centre_fans: bool,
+) -> Result<TriMesh> {
     if max_edges > MAX_FILLED_HOLE_EDGES {
         return Err(Error::InvalidParameter {
             name: "max_edges",
@@ -62,21 +103,41 @@ pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
         .collect();
     let mut faces = mesh.triangles().to_vec();
     let mut vertices = mesh.vertices().to_vec();
+    let corner_sets: HashSet<[u32; 3]> = if centre_fans {
+        HashSet::new()
+    } else {
+        faces.iter().map(|&t| sorted(t)).collect()
+    };
     let loops = boundary_loops_in(&topology);
     for hole in loops.iter().flat_map(|hole| simple_loops(hole)) {
         let k = hole.len();
         let closes = (0..k).all(|i| boundary.contains(&key(hole[i], hole[(i + 1) % k])));
-        if !(3..=max_edges).contains(&k) || !closes {
+        let open = hole
+            .iter()
+            .any(|&v| kept_open.get(v as usize) == Some(&true));
+        if !(3..=max_edges).contains(&k) || !closes || open {
             continue;
         }
-        let patch = least_area_triangulation(&vertices, &hole, &edges)
-            .unwrap_or_else(|| centre_fan(&mut vertices, &hole));
+        let Some(patch) = least_area_triangulation(&vertices, &hole, &edges)
+            .or_else(|| centre_fans.then(|| centre_fan(&mut vertices, &hole)))
+        else {
+            continue;
+        };
+        if !centre_fans && patch.iter().any(|t| corner_sets.contains(&sorted(*t))) {
+            continue;
+        }
         for &[a, b, c] in &patch {
             edges.extend([key(a, b), key(b, c), key(c, a)]);
         }
         faces.extend(patch);
     }
     TriMesh::new(vertices, faces)
+}
+
+/// The corners of `t` in increasing order.
+fn sorted(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
 }
 
 /// A new vertex at the mean of the corners of the closed polygon `hole`, appended to

@@ -76,7 +76,7 @@ pub use point_cloud::PointCloud;
 pub use primitives::{grid_plane, icosphere, subdivided_cube};
 pub use tri_mesh::TriMesh;
 
-pub use boundary_loops::boundary_loops;
+pub use boundary_loops::{boundary_loops, on_border};
 pub use bounding_box::{bounding_box, bounding_box_diagonal};
 pub use cap_flips::{CAP_RELATIVE_HEIGHT, flip_caps};
 pub use component_seed_floor::{MIN_COMPONENT_SEEDS, component_seed_floor};
@@ -100,7 +100,7 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
-pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes};
+pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes, fill_holes_away_from};
 pub use input_content::{
     InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points, read_input_mesh,
     read_input_point_cloud,
