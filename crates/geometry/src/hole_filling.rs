@@ -41,14 +41,13 @@ pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
-    fill(mesh, max_edges, &[], true)
+    fill(mesh, max_edges, &[], false)
 }
 
-/// [`fill_holes`] without new vertices, leaving open every hole with a corner `v` where
-/// `kept_open[v]` (vertices past its end are not), every hole no triangulation of its own
-/// corners closes, and every hole whose patch would repeat a face on the same corners (the rim
-/// of a lone face or of two faces on an edge: filled, a flat two-sided pillow): a simplifier
-/// closes the cracks it made, keeps the input's borders, and keeps its vertex count.
+/// [`fill_holes`] leaving open every hole with a corner `v` where `kept_open[v]` (vertices
+/// past its end are not) and every hole whose least-area patch would repeat a face on the same
+/// corners (the rim of a lone face or of two faces on an edge: filled, a flat two-sided
+/// pillow): a simplifier closes the cracks it made and keeps the input's borders.
 ///
 /// ```
 /// use meshgnn_geometry::{boundary_loops, fill_holes_away_from, icosphere, TriMesh};
@@ -70,17 +69,16 @@ pub fn fill_holes_away_from(
     max_edges: usize,
     kept_open: &[bool],
 ) -> Result<TriMesh> {
-    fill(mesh, max_edges, kept_open, false)
+    fill(mesh, max_edges, kept_open, true)
 }
 
-/// The filling of [`fill_holes`] and [`fill_holes_away_from`]: with `centre_fans` a hole no
-/// triangulation of its corners closes gets a vertex of its own; without, it stays open, as
-/// does a hole whose patch repeats an existing face's corners.
+/// The filling of [`fill_holes`] and [`fill_holes_away_from`]: with `refuse_pillows` a hole
+/// whose least-area patch repeats an existing face's corners stays open.
 fn fill(
     mesh: &TriMesh,
     max_edges: usize,
     kept_open: &[bool],
-    centre_fans: bool,
+    refuse_pillows: bool,
 ) -> Result<TriMesh> {
     if max_edges > MAX_FILLED_HOLE_EDGES {
         return Err(Error::InvalidParameter {
@@ -103,10 +101,10 @@ fn fill(
         .collect();
     let mut faces = mesh.triangles().to_vec();
     let mut vertices = mesh.vertices().to_vec();
-    let corner_sets: HashSet<[u32; 3]> = if centre_fans {
-        HashSet::new()
-    } else {
+    let corner_sets: HashSet<[u32; 3]> = if refuse_pillows {
         faces.iter().map(|&t| sorted(t)).collect()
+    } else {
+        HashSet::new()
     };
     let loops = boundary_loops_in(&topology);
     for hole in loops.iter().flat_map(|hole| simple_loops(hole)) {
@@ -118,14 +116,11 @@ fn fill(
         if !(3..=max_edges).contains(&k) || !closes || open {
             continue;
         }
-        let Some(patch) = least_area_triangulation(&vertices, &hole, &edges)
-            .or_else(|| centre_fans.then(|| centre_fan(&mut vertices, &hole)))
-        else {
-            continue;
+        let patch = match least_area_triangulation(&vertices, &hole, &edges) {
+            Some(patch) if patch.iter().any(|t| corner_sets.contains(&sorted(*t))) => continue,
+            Some(patch) => patch,
+            None => centre_fan(&mut vertices, &hole),
         };
-        if !centre_fans && patch.iter().any(|t| corner_sets.contains(&sorted(*t))) {
-            continue;
-        }
         for &[a, b, c] in &patch {
             edges.extend([key(a, b), key(b, c), key(c, a)]);
         }
@@ -380,6 +375,10 @@ mod tests {
         assert!(is_watertight(&closed) && is_edge_manifold(&closed));
         assert_eq!(closed.vertex_count(), v.len() + 1);
         assert_eq!(closed.face_count(), open.face_count() + 4);
+        // Away from any kept-open corner the same: a fan repeats no face's corners.
+        let away = fill_holes_away_from(&open, 30, &[]).unwrap();
+        assert_eq!(away.vertices(), closed.vertices());
+        assert_eq!(away.triangles(), closed.triangles());
         let centre = closed.vertices()[v.len()];
         for (i, c) in centre.iter().enumerate() {
             let mean = (0..4).map(|k| v[k][i]).sum::<f32>() / 4.0;

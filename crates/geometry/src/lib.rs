@@ -51,6 +51,7 @@ mod mass_matrix;
 mod mesh_report;
 mod non_manifold_edges;
 mod normalization;
+mod overlays;
 mod pca_normals;
 mod small_part_hulls;
 mod spatial_index;
@@ -112,6 +113,7 @@ pub use mass_matrix::lumped_mass_matrix;
 pub use mesh_report::{MeshReport, mesh_report};
 pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
 pub use normalization::{Normalization, unit_sphere_normalization};
+pub use overlays::{MAX_OVERLAY_FACES, remove_overlays};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
 pub use small_part_hulls::{MAX_HULL_AREA_RATIO, hull_small_open_parts};
 pub use spatial_index::{

@@ -167,6 +167,14 @@ impl TriMesh {
         }
     }
 
+    /// The same mesh, attributes included, with a subset of its own faces instead.
+    pub(crate) fn with_faces_of_its_own(&self, triangles: Vec<[u32; 3]>) -> Self {
+        Self {
+            triangles,
+            ..self.clone()
+        }
+    }
+
     /// Splits the mesh into its parts: `(vertices, triangles, normals, uvs, colors)`.
     #[allow(clippy::type_complexity)]
     pub fn into_parts(
