@@ -77,8 +77,8 @@ pub struct SimplifyArgs {
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Close the holes of at most K boundary edges left after the manifold pass, the input's
-    /// borders included (neural only; without it, only cracks of at most 4 edges away from the
-    /// input's borders are filled).
+    /// borders included (neural only; without it, only cracks away from the input's borders
+    /// are filled: holes of at most 4 edges, or 8 in a piece of at least 30 faces).
     #[arg(long, value_name = "K", num_args = 0..=1, default_missing_value = "30")]
     pub fill_holes: Option<usize>,
     /// Leave the selected vertices at their input positions instead of moving each to its
