@@ -19,10 +19,10 @@
 //! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece) away from the
 //! input's border ([`fill_holes_away_from`], with a centre vertex where no triangulation of a
 //! crack's corners fits) — these steps decide the faces on the selected vertices before any
-//! moves — and, when asked, instead of the cracks closes the holes left after the placement: first the cracks a rejected
-//! candidate covers ([`meshgnn_geometry::close_cracks`]), then every small hole by the
-//! least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond the
-//! thesis, each selected vertex then moves to the quadric optimum of the input region it
+//! moves — and, when asked, instead of the cracks closes the holes left after the placement:
+//! first the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then
+//! every small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond
+//! the thesis, each selected vertex then moves to the quadric optimum of the input region it
 //! stands for ([`meshgnn_graph::region_quadric_placement`]) unless
 //! [`NeuralSimplifyOptions::keep_positions`] asks for the thesis' selection as it is, and cap
 //! faces are flipped away ([`meshgnn_geometry::flip_caps`]).
@@ -421,12 +421,12 @@ impl NeuralMeshSimplifier {
     /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤` its distinct positions):
     /// vertices at one position welded first ([`weld_coincident_vertices`]: a model made of
     /// patches is simplified as one surface), faces with `p_t > 0.5`,
-    /// then the manifold pass (module docs) and its overlays removed, each closed part of at most
-    /// [`MIN_COMPONENT_SEEDS`] kept vertices its faces leave open replaced by their hull
+    /// then the manifold pass (module docs) and its overlays removed, each closed part of at
+    /// most [`MIN_COMPONENT_SEEDS`] kept vertices its faces leave open replaced by their hull
     /// ([`hull_small_open_parts`]), unless `options.fill_holes_up_to` is set the cracks inside
-    /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`]), the vertices placed unless `options.keep_positions`, then,
-    /// with `options.fill_holes_up_to: Some(k)`, the cracks closed with rejected candidates
-    /// and every hole of at most `k` edges filled; last, cap
+    /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`]), the vertices placed unless
+    /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
+    /// closed with rejected candidates and every hole of at most `k` edges filled; last, cap
     /// faces (three kept vertices along a straight crease) flipped away
     /// ([`meshgnn_geometry::flip_caps`]).
     /// Errors on a mesh without faces, a bad target or `k` above
