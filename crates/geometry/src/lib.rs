@@ -74,7 +74,7 @@ pub use io::{
     write_morph_animation, write_ply, write_point_cloud,
 };
 pub use point_cloud::PointCloud;
-pub use primitives::{grid_plane, icosphere, subdivided_cube};
+pub use primitives::{grid_plane, icosphere, subdivided_cube, torus};
 pub use tri_mesh::TriMesh;
 
 pub use boundary_loops::{boundary_loops, on_border};
@@ -115,7 +115,10 @@ pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage}
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use overlays::{MAX_OVERLAY_FACES, remove_overlays};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
-pub use small_part_hulls::{MAX_HULL_AREA_RATIO, hull_small_open_parts};
+pub use small_part_hulls::{
+    MAX_HULL_AREA_RATIO, OpenPart, PartSurface, hull_small_open_parts, part_hull,
+    rebuild_small_open_parts,
+};
 pub use spatial_index::{
     DEFAULT_LEAF_SIZE, Neighbours, SpatialIndex, SpatialNode, box_squared_distance,
     squared_distance,

@@ -20,14 +20,24 @@ use crate::vec3::{norm, triangle_cross};
 /// bound, 2.28× with none; docs/mesh_simplifier_model.md, "Small parts closed by their hull").
 pub const MAX_HULL_AREA_RATIO: f64 = 2.0;
 
+/// A closed part of the input that the output leaves open (see [`rebuild_small_open_parts`]).
+#[derive(Debug, Clone, Copy)]
+pub struct OpenPart<'a> {
+    /// The output vertices on the part, ascending (output vertex `i` stands for input vertex
+    /// `kept[i]`).
+    pub members: &'a [u32],
+    /// The part's input faces.
+    pub faces: &'a [[u32; 3]],
+}
+
 /// `output` with the faces of each small open part replaced by its hull.
 ///
 /// Output vertex `i < kept.len()` stands for input vertex `kept[i]`; later output vertices
 /// (added by hole filling) belong to no part. A part is a connected component of `input`
 /// whose every edge has two faces (closed) and which holds from 4 to `max_kept` output
 /// vertices; it is replaced when the output faces with a corner on it are not a closed surface
-/// over its vertices alone (none, a border, an edge of three faces, or a face reaching another
-/// part). Its replacement: every such face dropped, the [`convex_hull`] of its output
+/// over its vertices and vertices of no part (none, a border, an edge of three faces, or a
+/// face reaching another part). Its replacement: every such face dropped, the [`convex_hull`] of its output
 /// vertices added after the other faces (parts in the order of their smallest input vertex).
 /// A part whose vertices lie in one plane, or whose hull has more than
 /// [`MAX_HULL_AREA_RATIO`] times its area, keeps its faces. The output stays edge-manifold
@@ -51,6 +61,49 @@ pub fn hull_small_open_parts(
     kept: &[u32],
     output: &TriMesh,
     max_kept: usize,
+) -> Result<TriMesh> {
+    rebuild_small_open_parts(input, kept, output, max_kept, |part| {
+        part_hull(input, output, part)
+    })
+}
+
+/// The surface that replaces an open part: faces over local indices, `i < members.len()`
+/// naming the part's output vertex `members[i]` and later ones `extra[i - members.len()]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartSurface {
+    /// The faces, over local indices.
+    pub faces: Vec<[u32; 3]>,
+    /// Vertices the surface adds, appended to the output's.
+    pub extra: Vec<[f32; 3]>,
+}
+
+/// The [`convex_hull`] of `part`'s output vertices, unless they lie in one plane or the hull
+/// has more than [`MAX_HULL_AREA_RATIO`] times the part's area.
+pub fn part_hull(input: &TriMesh, output: &TriMesh, part: &OpenPart) -> Option<PartSurface> {
+    let points: Vec<[f32; 3]> = part
+        .members
+        .iter()
+        .map(|&v| output.vertices()[v as usize])
+        .collect();
+    let hull = convex_hull(&points)?;
+    let part_area = surface_area(input.vertices(), part.faces);
+    (surface_area(&points, &hull) <= MAX_HULL_AREA_RATIO * part_area).then_some(PartSurface {
+        faces: hull,
+        extra: Vec::new(),
+    })
+}
+
+/// `output` with the faces of each small open part (as in [`hull_small_open_parts`]) replaced
+/// by `rebuild(part)`, added after the other faces with its extra vertices after the output's
+/// (parts in the order of their smallest input vertex); `None` keeps the part's faces.
+///
+/// Errors as [`hull_small_open_parts`], and when a surface names a local index it lacks.
+pub fn rebuild_small_open_parts(
+    input: &TriMesh,
+    kept: &[u32],
+    output: &TriMesh,
+    max_kept: usize,
+    rebuild: impl Fn(&OpenPart) -> Option<PartSurface>,
 ) -> Result<TriMesh> {
     if kept.len() > output.vertex_count() {
         return Err(Error::LengthMismatch {
@@ -87,7 +140,7 @@ pub fn hull_small_open_parts(
     if !(0..count).any(sized) {
         return Ok(output.clone());
     }
-    // The input faces of the parts of a size to hull: whether they close them, their area.
+    // The input faces of the parts of a size to rebuild: whether they close them.
     let mut part_faces: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
     for t in input.triangles() {
         let c = label[t[0] as usize] as usize;
@@ -106,39 +159,45 @@ pub fn hull_small_open_parts(
             if touching[c].last() != Some(t) {
                 touching[c].push(*t);
             }
-            reaches_out[c] |= parts.iter().any(|&p| p != Some(c));
+            reaches_out[c] |= parts.iter().any(|&p| p.is_some_and(|p| p != c));
         }
     }
-    let hulls: Vec<(usize, Vec<[u32; 3]>)> = (0..count)
+    let rebuilt: Vec<(usize, PartSurface)> = (0..count)
         .filter(|&c| small(c) && (reaches_out[c] || !is_closed_surface(&touching[c])))
         .filter_map(|c| {
-            let points: Vec<[f32; 3]> = members[c]
-                .iter()
-                .map(|&v| output.vertices()[v as usize])
-                .collect();
-            let hull = convex_hull(&points)?;
-            let part_area = surface_area(input.vertices(), &part_faces[c]);
-            (surface_area(&points, &hull) <= MAX_HULL_AREA_RATIO * part_area).then(|| {
-                let faces = hull.iter().map(|t| t.map(|i| members[c][i as usize]));
-                (c, faces.collect())
-            })
+            let part = OpenPart {
+                members: &members[c],
+                faces: &part_faces[c],
+            };
+            rebuild(&part).map(|surface| (c, surface))
         })
         .collect();
-    if hulls.is_empty() {
+    if rebuilt.is_empty() {
         return Ok(output.clone());
     }
     let mut replaced = vec![false; count];
-    for &(c, _) in &hulls {
+    for &(c, _) in &rebuilt {
         replaced[c] = true;
     }
-    let faces: Vec<[u32; 3]> = output
+    let mut vertices = output.vertices().to_vec();
+    let mut faces: Vec<[u32; 3]> = output
         .triangles()
         .iter()
         .filter(|t| !t.iter().any(|&v| part_of(v).is_some_and(|c| replaced[c])))
         .copied()
-        .chain(hulls.into_iter().flat_map(|(_, hull)| hull))
         .collect();
-    TriMesh::new(output.vertices().to_vec(), faces)
+    for (c, surface) in rebuilt {
+        let first_extra = vertices.len() as u32;
+        let local = |i: u32| -> u32 {
+            match members[c].get(i as usize) {
+                Some(&v) => v,
+                None => first_extra + (i - members[c].len() as u32),
+            }
+        };
+        faces.extend(surface.faces.iter().map(|t| t.map(local)));
+        vertices.extend(surface.extra);
+    }
+    TriMesh::new(vertices, faces)
 }
 
 /// The total area of `faces` over `vertices`.
@@ -170,7 +229,7 @@ fn is_closed_surface(faces: &[[u32; 3]]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{icosphere, is_edge_manifold, is_watertight};
+    use crate::{icosphere, is_edge_manifold, is_watertight, torus};
 
     /// Two unit icospheres, the second shifted by 3 along x.
     fn two_spheres() -> TriMesh {
@@ -214,6 +273,56 @@ mod tests {
             &TriMesh::new(hulled.vertices().to_vec(), hull.to_vec()).unwrap()
         ));
         assert_eq!(hulled.vertices(), output.vertices());
+    }
+
+    #[test]
+    fn a_rebuilt_part_may_add_vertices_after_the_output() {
+        let input = two_spheres();
+        let kept: Vec<u32> = (0..6).collect();
+        let output = TriMesh::new(kept_positions(&input, &kept), vec![[0, 1, 2]]).unwrap();
+        // A tetrahedron on members 0, 1, 2 and one new vertex (local index 6).
+        let apex = [0.0, 0.0, 5.0];
+        let tetrahedron = vec![[0, 2, 1], [0, 1, 6], [1, 2, 6], [2, 0, 6]];
+        let rebuilt = rebuild_small_open_parts(&input, &kept, &output, 6, |part| {
+            assert_eq!(part.members, &[0, 1, 2, 3, 4, 5]);
+            assert_eq!(part.faces.len(), icosphere(1).face_count());
+            Some(PartSurface {
+                faces: tetrahedron.clone(),
+                extra: vec![apex],
+            })
+        })
+        .unwrap();
+        assert_eq!(rebuilt.vertex_count(), 7);
+        assert_eq!(rebuilt.vertices()[6], apex);
+        assert_eq!(rebuilt.triangles(), &tetrahedron[..]);
+        // A surface naming a local index past its extras is an error.
+        let past = rebuild_small_open_parts(&input, &kept, &output, 6, |_| {
+            Some(PartSurface {
+                faces: vec![[0, 1, 7]],
+                extra: Vec::new(),
+            })
+        });
+        assert!(past.is_err());
+    }
+
+    #[test]
+    fn a_part_closed_through_a_vertex_of_no_part_is_left_as_it_is() {
+        let input = two_spheres();
+        // Four kept vertices of the first sphere and a vertex past the kept ones (a hole
+        // fill's centre): the tetrahedron over three of them and the centre is closed and
+        // reaches no other part.
+        let kept = [0u32, 1, 2, 3];
+        let mut vertices = kept_positions(&input, &kept);
+        vertices.push([0.0, 0.0, 0.0]);
+        let faces = vec![[0, 1, 2], [0, 4, 1], [1, 4, 2], [2, 4, 0]];
+        let output = TriMesh::new(vertices, faces.clone()).unwrap();
+        let asked = std::cell::Cell::new(false);
+        let same = rebuild_small_open_parts(&input, &kept, &output, 5, |_| {
+            asked.set(true);
+            None
+        });
+        assert_eq!(same.unwrap().triangles(), &faces[..]);
+        assert!(!asked.get());
     }
 
     #[test]
@@ -267,43 +376,18 @@ mod tests {
         assert_eq!(same.triangles(), flat.triangles());
     }
 
-    /// A closed torus of radii 1 and `tube` in the plane z = 0, `ring × 8` vertices.
-    fn torus(ring: u32, tube: f32) -> TriMesh {
-        let (u_steps, v_steps) = (ring, 8u32);
-        let vertices = (0..u_steps)
-            .flat_map(|i| (0..v_steps).map(move |j| (i, j)))
-            .map(|(i, j)| {
-                let u = std::f32::consts::TAU * i as f32 / u_steps as f32;
-                let v = std::f32::consts::TAU * j as f32 / v_steps as f32;
-                let r = 1.0 + tube * v.cos();
-                [r * u.cos(), r * u.sin(), tube * v.sin()]
-            })
-            .collect();
-        let at = |i: u32, j: u32| (i % u_steps) * v_steps + j % v_steps;
-        let faces = (0..u_steps)
-            .flat_map(|i| (0..v_steps).map(move |j| (i, j)))
-            .flat_map(|(i, j)| {
-                [
-                    [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
-                    [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
-                ]
-            })
-            .collect();
-        TriMesh::new(vertices, faces).unwrap()
-    }
-
     #[test]
     fn a_curled_part_whose_hull_would_span_its_curl_keeps_its_faces() {
         // A thin ring (area 4π²·0.05 ≈ 2.0) kept at five vertices around it, outer and upper
         // ones mixed so they are not coplanar: their hull is a pentagonal slab of about
         // 2 · 2.4 = 4.8, more than twice the ring's area.
-        let ring = torus(40, 0.05);
+        let ring = torus(1.0, 0.05, 40, 8);
         let kept = [0u32, 8 * 8 + 2, 16 * 8, 24 * 8 + 2, 32 * 8];
         let output = TriMesh::new(kept_positions(&ring, &kept), vec![[0, 1, 2]]).unwrap();
         let same = hull_small_open_parts(&ring, &kept, &output, 5).unwrap();
         assert_eq!(same.triangles(), output.triangles());
         // A fat ring (tube 0.6, area ≈ 23.7) with the same choice is hulled.
-        let fat = torus(40, 0.6);
+        let fat = torus(1.0, 0.6, 40, 8);
         let output = TriMesh::new(kept_positions(&fat, &kept), vec![[0, 1, 2]]).unwrap();
         let hulled = hull_small_open_parts(&fat, &kept, &output, 5).unwrap();
         assert!(is_watertight(&hulled));

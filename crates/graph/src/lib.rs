@@ -35,8 +35,8 @@ pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
 pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};
 pub use qem::{
     Decimation, DecimationOptions, QemVertices, Quadric, SeedRegions, StopReason, Target,
-    WeldedMesh, decimate, decimate_keeping, decimate_with_progress, qem_vertices,
-    region_quadric_placement, region_quadric_vertices, region_seed_exchange,
+    WeldedMesh, decimate, decimate_keeping, decimate_with_progress, kept_vertex_connectivity,
+    qem_vertices, region_quadric_placement, region_quadric_vertices, region_seed_exchange,
     weld_coincident_vertices,
 };
 

@@ -5,7 +5,8 @@
 //! selected vertices' regions with their quadrics ([`SeedRegions`]), the vertices moved to
 //! their regions' best-fitting vertex ([`region_quadric_vertices`]), exchanged between
 //! regions by quadric error ([`region_seed_exchange`]) and placed at their quadric optimum
-//! ([`region_quadric_placement`]). The other files
+//! ([`region_quadric_placement`]), and the QEM connectivity of chosen vertices
+//! ([`kept_vertex_connectivity`]). The other files
 //! are the decimation's parts: welding, vertex records and collapses, edge placement,
 //! validity checks, candidate sorting, speculative parallel checks, memory warm-up and the
 //! changed-vertex sets.
@@ -15,6 +16,7 @@ mod collapse_checks;
 mod collapser;
 mod decimation;
 mod edge_placement;
+mod kept_connectivity;
 mod memory_warmup;
 mod quadric;
 mod region_placement;
@@ -29,6 +31,7 @@ pub use decimation::{
     Decimation, DecimationOptions, StopReason, Target, decimate, decimate_keeping,
     decimate_with_progress,
 };
+pub use kept_connectivity::kept_vertex_connectivity;
 pub use quadric::Quadric;
 pub use region_placement::{region_quadric_placement, region_quadric_vertices};
 pub use seed_exchange::region_seed_exchange;
