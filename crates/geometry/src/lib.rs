@@ -113,7 +113,7 @@ pub use mass_matrix::lumped_mass_matrix;
 pub use mesh_report::{MeshReport, mesh_report};
 pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage};
 pub use normalization::{Normalization, unit_sphere_normalization};
-pub use overlays::{MAX_OVERLAY_FACES, remove_overlays};
+pub use overlays::{MAX_OVERLAY_FACES, remove_flaps, remove_overlays};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
 pub use small_part_hulls::{
     MAX_HULL_AREA_RATIO, OpenPart, PartSurface, hull_small_open_parts, part_hull,

@@ -5,11 +5,13 @@
 //! surface that piece already covers, adds no vertex to it, and opens three or four border
 //! edges in an otherwise closed output (WA, section 6.5.1; docs/mesh_simplifier_model.md,
 //! "Overlays removed, wider cracks in large pieces, cracks closed by a centre vertex").
+//! *Flaps* are their kin on a closed surface: a lone face or pair hanging from it by a corner
+//! or two, a fin sticking out of it ("Flaps on closed pieces dropped").
 
 use petgraph::unionfind::UnionFind;
 
 use crate::TriMesh;
-use crate::edge_topology::edge_topology;
+use crate::edge_topology::{EdgeTopology, edge_topology};
 
 /// The most faces an overlay has: one face (three border edges) or two on an edge (four).
 pub const MAX_OVERLAY_FACES: usize = 2;
@@ -31,52 +33,152 @@ pub const MAX_OVERLAY_FACES: usize = 2;
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn remove_overlays(mesh: &TriMesh) -> TriMesh {
-    let faces = mesh.triangles();
-    let topology = edge_topology(mesh);
-    let mut pieces = UnionFind::<u32>::new(faces.len());
-    for e in 0..topology.edge_count() {
-        if let [first, rest @ ..] = topology.incidences(e) {
-            for other in rest {
-                pieces.union(first.face, other.face);
-            }
-        }
-    }
-    let piece = pieces.into_labeling();
-    let mut size = vec![0usize; faces.len()];
-    for &p in &piece {
-        size[p as usize] += 1;
-    }
-    let large = |face: u32| size[piece[face as usize] as usize] > MAX_OVERLAY_FACES;
+    let pieces = Pieces::new(mesh);
     // Per vertex: whether a larger piece uses it, and whether one has a border edge there.
     let mut on_large = vec![false; mesh.vertex_count()];
-    for (f, t) in faces.iter().enumerate() {
-        if large(f as u32) {
+    let mut on_large_border = vec![false; mesh.vertex_count()];
+    for (f, t) in mesh.triangles().iter().enumerate() {
+        if pieces.large(f) {
             for &v in t {
                 on_large[v as usize] = true;
             }
         }
     }
-    let mut on_large_border = vec![false; mesh.vertex_count()];
-    for e in 0..topology.edge_count() {
-        if let [only] = topology.incidences(e)
-            && large(only.face)
-        {
-            on_large_border[only.from as usize] = true;
-            on_large_border[only.to as usize] = true;
+    for (from, to, face) in pieces.border_edges() {
+        if pieces.large(face as usize) {
+            on_large_border[from as usize] = true;
+            on_large_border[to as usize] = true;
         }
     }
     let inside_large = |v: u32| on_large[v as usize] && !on_large_border[v as usize];
-    let mut overlay = vec![true; faces.len()];
-    for (f, t) in faces.iter().enumerate() {
-        overlay[piece[f] as usize] &= !large(f as u32) && t.iter().all(|&v| inside_large(v));
+    let faces = mesh.triangles();
+    pieces.drop_small(mesh, |f| faces[f].iter().all(|&v| inside_large(v)))
+}
+
+/// `mesh` without its flaps: every piece (faces joined across edges) of at most
+/// [`MAX_OVERLAY_FACES`] faces with a corner on a larger piece that has no border edge (a
+/// closed surface), and no corner where `on_open_part()` holds. Such a face hangs from that
+/// surface by one or two corners, a fin whose own corners no face of the surface reaches; its
+/// border edges are the only ones left in an otherwise closed output. `on_open_part()` marks
+/// vertices that stand for an open part of a simplifier's input, where a border belongs
+/// (vertices past its end are not marked); it is called only when a flap is found. Vertices
+/// and the order of the other faces are kept; a small piece touching only open pieces, or
+/// none, stays.
+///
+/// ```
+/// use meshgnn_geometry::{TriMesh, icosphere, is_watertight, remove_flaps};
+/// let sphere = icosphere(1);
+/// let n = sphere.vertex_count() as u32;
+/// // A face hanging from sphere vertex 0 by one corner.
+/// let mut vertices = sphere.vertices().to_vec();
+/// vertices.extend([[2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]);
+/// let mut faces = sphere.triangles().to_vec();
+/// faces.push([0, n, n + 1]);
+/// let with_flap = TriMesh::new(vertices, faces)?;
+/// assert!(!is_watertight(&with_flap));
+/// assert_eq!(remove_flaps(&with_flap, Vec::new).triangles(), sphere.triangles());
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn remove_flaps(mesh: &TriMesh, on_open_part: impl FnOnce() -> Vec<bool>) -> TriMesh {
+    let pieces = Pieces::new(mesh);
+    let mut open = vec![false; mesh.face_count()];
+    for (_, _, face) in pieces.border_edges() {
+        open[pieces.label[face as usize] as usize] = true;
     }
-    let kept = faces
-        .iter()
-        .zip(&piece)
-        .filter(|&(_, &p)| !overlay[p as usize])
-        .map(|(t, _)| *t)
-        .collect();
-    mesh.with_faces_of_its_own(kept)
+    let mut on_closed_large = vec![false; mesh.vertex_count()];
+    for (f, t) in mesh.triangles().iter().enumerate() {
+        if pieces.large(f) && !open[pieces.label[f] as usize] {
+            for &v in t {
+                on_closed_large[v as usize] = true;
+            }
+        }
+    }
+    // Per piece: whether it touches a closed larger piece, and whether a corner is on an open
+    // part.
+    let mut touches_closed = vec![false; mesh.face_count()];
+    for (f, t) in mesh.triangles().iter().enumerate() {
+        if !pieces.large(f) {
+            touches_closed[pieces.label[f] as usize] |=
+                t.iter().any(|&v| on_closed_large[v as usize]);
+        }
+    }
+    if !touches_closed.contains(&true) {
+        return mesh.clone();
+    }
+    let on_open_part = on_open_part();
+    let mut on_open = vec![false; mesh.face_count()];
+    for (f, t) in mesh.triangles().iter().enumerate() {
+        on_open[pieces.label[f] as usize] |= t
+            .iter()
+            .any(|&v| on_open_part.get(v as usize).copied().unwrap_or(false));
+    }
+    pieces.drop_small(mesh, |f| {
+        let p = pieces.label[f] as usize;
+        touches_closed[p] && !on_open[p]
+    })
+}
+
+/// The pieces of a mesh: faces joined across edges (any number of faces per edge).
+struct Pieces {
+    topology: EdgeTopology,
+    /// Per face, its piece (a face index).
+    label: Vec<u32>,
+    /// Per piece label, its face count.
+    size: Vec<usize>,
+}
+
+impl Pieces {
+    fn new(mesh: &TriMesh) -> Self {
+        let topology = edge_topology(mesh);
+        let mut pieces = UnionFind::<u32>::new(mesh.face_count());
+        for e in 0..topology.edge_count() {
+            if let [first, rest @ ..] = topology.incidences(e) {
+                for other in rest {
+                    pieces.union(first.face, other.face);
+                }
+            }
+        }
+        let label = pieces.into_labeling();
+        let mut size = vec![0usize; label.len()];
+        for &p in &label {
+            size[p as usize] += 1;
+        }
+        Self {
+            topology,
+            label,
+            size,
+        }
+    }
+
+    /// Whether face `f` lies in a piece of more than [`MAX_OVERLAY_FACES`] faces.
+    fn large(&self, f: usize) -> bool {
+        self.size[self.label[f] as usize] > MAX_OVERLAY_FACES
+    }
+
+    /// The edges with one face: `(from, to, face)`.
+    fn border_edges(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+        (0..self.topology.edge_count()).filter_map(|e| match self.topology.incidences(e) {
+            [only] => Some((only.from, only.to, only.face)),
+            _ => None,
+        })
+    }
+
+    /// `mesh` without the small pieces (at most [`MAX_OVERLAY_FACES`] faces) every face `f`
+    /// of which satisfies `drop(f)`.
+    fn drop_small(&self, mesh: &TriMesh, drop: impl Fn(usize) -> bool) -> TriMesh {
+        let faces = mesh.triangles();
+        let mut dropped = vec![true; faces.len()];
+        for f in 0..faces.len() {
+            dropped[self.label[f] as usize] &= !self.large(f) && drop(f);
+        }
+        let kept = faces
+            .iter()
+            .zip(&self.label)
+            .filter(|&(_, &p)| !dropped[p as usize])
+            .map(|(t, _)| *t)
+            .collect();
+        mesh.with_faces_of_its_own(kept)
+    }
 }
 
 #[cfg(test)]
@@ -132,5 +234,66 @@ mod tests {
         open.push([rim, far[0], far[1]]);
         let open = TriMesh::new(vertices, open).unwrap();
         assert_eq!(remove_overlays(&open).triangles(), open.triangles());
+    }
+
+    #[test]
+    fn flaps_on_a_closed_surface_go_and_those_on_an_open_one_stay() {
+        let sphere = icosphere(1);
+        let n = sphere.vertex_count() as u32;
+        let mut vertices = sphere.vertices().to_vec();
+        vertices.extend([
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [3.0, 0.0, 1.0],
+            [9.0, 9.0, 9.0],
+            [9.0, 8.0, 9.0],
+            [8.0, 9.0, 9.0],
+        ]);
+        // A pair hanging from sphere vertex 0 (its second face touches the sphere nowhere) and
+        // a lone face touching nothing; then a fan from vertex 5 that joins the lone face into
+        // a piece of four (not small).
+        let mut faces = sphere.triangles().to_vec();
+        let pair = [[0, n, n + 1], [n, n + 2, n + 1]];
+        let lone = [n + 3, n + 4, n + 5];
+        let fan = [[5, n, n + 3], [5, n + 3, n + 4], [5, n + 4, n + 5]];
+        faces.extend(pair);
+        faces.push(lone);
+        let mesh = TriMesh::new(vertices.clone(), faces).unwrap();
+        let mut expected = sphere.triangles().to_vec();
+        expected.push(lone);
+        assert_eq!(remove_flaps(&mesh, Vec::new).triangles(), &expected[..]);
+        let mut with_fan = expected.clone();
+        with_fan.extend(fan);
+        let fan_mesh = TriMesh::new(vertices.clone(), with_fan.clone()).unwrap();
+        assert_eq!(remove_flaps(&fan_mesh, Vec::new).triangles(), &with_fan[..]);
+        // The same pair on the sphere less one face (a piece with a border) stays.
+        let mut open = sphere.triangles()[1..].to_vec();
+        open.extend(pair);
+        let open = TriMesh::new(vertices, open).unwrap();
+        assert_eq!(remove_flaps(&open, Vec::new).triangles(), open.triangles());
+    }
+
+    #[test]
+    fn a_flap_with_a_corner_on_an_open_part_stays() {
+        let sphere = icosphere(1);
+        let n = sphere.vertex_count() as u32;
+        let mut vertices = sphere.vertices().to_vec();
+        vertices.extend([[2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]);
+        let mut faces = sphere.triangles().to_vec();
+        faces.push([0, n, n + 1]);
+        let mesh = TriMesh::new(vertices, faces).unwrap();
+        let mut on_open_part = vec![false; mesh.vertex_count()];
+        on_open_part[n as usize + 1] = true;
+        assert_eq!(
+            remove_flaps(&mesh, || on_open_part).triangles(),
+            mesh.triangles()
+        );
+        // Marks on the sphere alone do not keep it.
+        let mut sphere_marked = vec![false; mesh.vertex_count()];
+        sphere_marked[7] = true;
+        assert_eq!(
+            remove_flaps(&mesh, || sphere_marked).triangles(),
+            sphere.triangles()
+        );
     }
 }

@@ -19,7 +19,8 @@
 //! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece) away from the
 //! input's border ([`fill_holes_away_from`], with a centre vertex where no triangulation of a
 //! crack's corners fits), rebuilds each small closed part still left open as QEM connects its
-//! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis)
+//! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis),
+//! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`])
 //! — these steps decide the faces on the selected vertices before any moves — and, when asked, instead of the cracks closes the holes left after the placement:
 //! first the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then
 //! every small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond
@@ -48,7 +49,8 @@ use meshgnn_geometry::{
     MIN_COMPONENT_SEEDS, OpenPart, PartSurface, TriMesh, boundary_loops, close_cracks,
     component_seed_floor, connected_components, fill_holes, fill_holes_away_from, flip_caps,
     hull_small_open_parts, nearest_seed_dual_triangles, on_border, rebuild_small_open_parts,
-    remove_overlays, select_manifold_faces, unit_sphere_normalization, vertex_normals,
+    remove_flaps, remove_overlays, select_manifold_faces, unit_sphere_normalization,
+    vertex_normals,
 };
 use meshgnn_graph::{
     CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order, kept_vertex_connectivity,
@@ -428,7 +430,8 @@ impl NeuralMeshSimplifier {
     /// ([`hull_small_open_parts`]), unless `options.fill_holes_up_to` is set the cracks inside
     /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`]), each closed part of at most
     /// [`MAX_REBUILT_PART_VERTICES`] kept vertices still open rebuilt as QEM connects them
-    /// (`qem_connected_part`), the vertices placed unless
+    /// (`qem_connected_part`), faces hanging from a closed piece of a closed input part
+    /// dropped ([`remove_flaps`]), the vertices placed unless
     /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
     /// closed with rejected candidates and every hole of at most `k` edges filled; last, cap
     /// faces (three kept vertices along a straight crease) flipped away
@@ -531,6 +534,7 @@ impl NeuralMeshSimplifier {
             MAX_REBUILT_PART_VERTICES,
             |part| qem_connected_part(mesh, &vertex_map, part),
         )?;
+        let selected = remove_flaps(&selected, || on_open_parts(mesh, &vertex_map));
         let vertices = match regions {
             None => selected.vertices().to_vec(),
             Some(regions) => region_quadric_placement(mesh, regions?, &vertex_map, &selected)?,
@@ -595,6 +599,31 @@ fn qem_connected_part(input: &TriMesh, vertex_map: &[u32], part: &OpenPart) -> O
     kept_vertex_connectivity(input.vertices(), part.faces, &keep, part.members.len())
         .ok()
         .flatten()
+}
+
+/// Per output vertex `i` (standing for `input` vertex `vertex_map[i]`): whether it stands for
+/// a vertex of an input component with a border, where the output may keep one too.
+fn on_open_parts(input: &TriMesh, vertex_map: &[u32]) -> Vec<bool> {
+    let (count, component) = connected_components(input);
+    let mut open = vec![false; count];
+    for v in boundary_loops(input).into_iter().flatten() {
+        if let Some(c) = component
+            .get(v as usize)
+            .and_then(|&c| open.get_mut(c as usize))
+        {
+            *c = true;
+        }
+    }
+    vertex_map
+        .iter()
+        .map(|&v| {
+            component
+                .get(v as usize)
+                .and_then(|&c| open.get(c as usize))
+                .copied()
+                .unwrap_or(false)
+        })
+        .collect()
 }
 
 /// Holes of at most this many edges are closed by default, unless a corner stands for a vertex
@@ -878,6 +907,18 @@ mod tests {
             .collect();
         assert!(faces.iter().flatten().all(|&v| on(v)));
         TriMesh::new(mesh.vertices().to_vec(), faces).unwrap()
+    }
+
+    #[test]
+    fn vertices_on_open_input_parts_are_marked() {
+        // The sphere and, beside it, a grid (an open part).
+        let n = offset_sphere().vertex_count() as u32;
+        let two = sphere_and(&meshgnn_geometry::grid_plane(3, 3), |p| {
+            [p[0] + 100.0, p[1], p[2]]
+        });
+        // Two sphere vertices and two grid vertices (an interior one and a corner).
+        let marks = on_open_parts(&two, &[0, n + 5, 7, n]);
+        assert_eq!(marks, vec![false, true, false, true]);
     }
 
     #[test]
