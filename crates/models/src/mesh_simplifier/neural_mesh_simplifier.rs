@@ -577,7 +577,7 @@ impl NeuralMeshSimplifier {
 /// The most kept vertices a closed input part may hold for its output, when the network and
 /// the crack fill leave it open, to be rebuilt as QEM connects them (`qem_connected_part`):
 /// a leg, an antenna, a bolt. A larger part keeps the network's faces. Every part of the
-/// data-fixtures ant holds fewer at 50 % (at most 33); the bound is not tuned further.
+/// data-fixtures ant holds fewer at 50 % (at most 28 over seeds 0-3); the bound is not tuned.
 pub const MAX_REBUILT_PART_VERTICES: usize = 64;
 
 /// The surface QEM makes of `part` (vertex `i` of the output standing for `input` vertex
