@@ -37,8 +37,9 @@ pub struct OpenPart<'a> {
 /// whose every edge has two faces (closed) and which holds from 4 to `max_kept` output
 /// vertices; it is replaced when the output faces with a corner on it are not a closed surface
 /// over its vertices and vertices of no part (none, a border, an edge of three faces, or a
-/// face reaching another part). Its replacement: every such face dropped, the [`convex_hull`] of its output
-/// vertices added after the other faces (parts in the order of their smallest input vertex).
+/// face reaching another part). Its replacement: every such face dropped, the [`convex_hull`]
+/// of its output vertices added after the other faces (parts in the order of their smallest
+/// input vertex).
 /// A part whose vertices lie in one plane, or whose hull has more than
 /// [`MAX_HULL_AREA_RATIO`] times its area, keeps its faces. The output stays edge-manifold
 /// where it was: a hull's vertices carry only its own faces. Vertices are unchanged.
