@@ -22,7 +22,8 @@
 //! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis),
 //! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`]) —
 //! these steps decide the faces on the selected vertices before any moves — and, when asked,
-//! instead of the cracks closes the holes left after the placement: first the cracks a rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then
+//! instead of the cracks closes the holes left after the placement: first the cracks a
+//! rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then
 //! every small hole by the least-area triangulation ([`meshgnn_geometry::fill_holes`]). Beyond
 //! the thesis, each selected vertex then moves to the quadric optimum of the input region it
 //! stands for ([`meshgnn_graph::region_quadric_placement`]) unless
