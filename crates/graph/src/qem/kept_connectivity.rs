@@ -1,18 +1,22 @@
 //! The QEM connectivity of chosen vertices on a surface (beyond the thesis, for the neural
 //! mesh simplifier of ch. 6): every other vertex collapses onto them at input positions, so
 //! the faces left join exactly the chosen vertices, closed where the surface is closed
-//! (docs/mesh_simplifier_model.md, "Small parts rebuilt by QEM").
+//! (docs/mesh_simplifier_model.md, "Small parts rebuilt by QEM" and "Curled parts folded
+//! closed").
 
 use meshgnn_geometry::{PartSurface, TriMesh};
 
 use super::decimation::{DecimationOptions, Target, decimate_keeping};
+use super::held_vertex_folding::fold_held_vertices;
 use crate::error::Result;
 
 /// The surface [`decimate_keeping`] leaves of the surface `faces` (over `vertices`) when every
 /// vertex but `keep` may collapse onto them at its input position (`keep_original_positions`,
 /// a target of one face): faces over local indices, `i < keep.len()` naming `keep[i]` and
 /// later ones the vertices the manifold, flip and fold checks held (`extra`, at their input
-/// positions). `None` when more than `max_extra` are held or no face is left.
+/// positions). When more than `max_extra` are held, held vertices collapse further under the
+/// link condition alone, letting faces fold, until `max_extra` remain (a part that curls).
+/// `None` when more are left or no face is.
 ///
 /// Errors when a face or `keep` names a vertex `vertices` lacks.
 ///
@@ -56,6 +60,12 @@ pub fn kept_vertex_connectivity(
         ..Default::default()
     };
     let out = decimate_keeping(&surface, &options, &keep_local, &mut |_| {})?;
+    let mut held = vec![true; out.mesh.vertex_count()];
+    for &v in &keep_local {
+        held[out.vertex_map[v as usize] as usize] = false;
+    }
+    let mut faces = out.mesh.triangles().to_vec();
+    fold_held_vertices(out.mesh.vertices(), &mut faces, &mut held, max_extra);
     // Output vertex → local index: the kept ones first, then the held ones in output order.
     let mut index = vec![u32::MAX; out.mesh.vertex_count()];
     for (i, &v) in keep_local.iter().enumerate() {
@@ -63,21 +73,16 @@ pub fn kept_vertex_connectivity(
     }
     let mut extra = Vec::new();
     for (o, slot) in index.iter_mut().enumerate() {
-        if *slot == u32::MAX {
+        if held[o] {
             *slot = (keep.len() + extra.len()) as u32;
             extra.push(out.mesh.vertices()[o]);
         }
     }
-    if out.mesh.face_count() == 0 || extra.len() > max_extra {
+    if faces.is_empty() || extra.len() > max_extra {
         return Ok(None);
     }
     Ok(Some(PartSurface {
-        faces: out
-            .mesh
-            .triangles()
-            .iter()
-            .map(|t| t.map(|v| index[v as usize]))
-            .collect(),
+        faces: faces.iter().map(|t| t.map(|v| index[v as usize])).collect(),
         extra,
     }))
 }

@@ -16,6 +16,7 @@ mod collapse_checks;
 mod collapser;
 mod decimation;
 mod edge_placement;
+mod held_vertex_folding;
 mod kept_connectivity;
 mod memory_warmup;
 mod quadric;

@@ -1,0 +1,164 @@
+//! Collapses that QEM's geometric checks refuse, for [`super::kept_vertex_connectivity`]:
+//! on a part that curls (the data-fixtures ant's antennae), the flip and fold checks of
+//! Garland & Heckbert (1997, §3) hold back vertices a closed surface over the kept ones does
+//! not need. Here only the link condition (Dey et al., 1999) guards a collapse, so the
+//! surface stays a closed 2-manifold while a face may fold; the least folding collapse goes
+//! first (docs/mesh_simplifier_model.md, "Curled parts folded closed").
+
+use meshgnn_geometry::vec3::{dot, norm, triangle_cross};
+
+/// The surface `faces` over `positions` with held vertices (`held[v]`) collapsed onto a
+/// neighbour, one at a time, until at most `max_held` remain or no collapse keeps the link
+/// condition: the common neighbours of the two ends are the apexes of the faces on their edge,
+/// no interior edge joins two border vertices, and the part keeps more than four vertices. Of
+/// the collapses allowed, each step takes the one whose moved faces keep their normals best
+/// (the smallest worst turn). Vertex numbers are unchanged; a collapsed vertex loses its
+/// faces and its `held` mark.
+pub(crate) fn fold_held_vertices(
+    positions: &[[f32; 3]],
+    faces: &mut Vec<[u32; 3]>,
+    held: &mut [bool],
+    max_held: usize,
+) {
+    let mut alive = vec![false; positions.len()];
+    for &v in faces.iter().flatten() {
+        alive[v as usize] = true;
+    }
+    loop {
+        let held_count = (0..held.len()).filter(|&v| held[v] && alive[v]).count();
+        let live_count = alive.iter().filter(|&&a| a).count();
+        if held_count <= max_held || live_count <= 4 {
+            return;
+        }
+        let best = (0..held.len() as u32)
+            .filter(|&h| held[h as usize] && alive[h as usize])
+            .flat_map(|h| neighbours(faces, h).into_iter().map(move |t| (h, t)))
+            .filter(|&(h, t)| link_condition_holds(faces, h, t))
+            .map(|(h, t)| (worst_normal_cos(positions, faces, h, t), h, t))
+            .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)).then(b.2.cmp(&a.2)));
+        let Some((_, h, t)) = best else { return };
+        faces.retain(|f| !(f.contains(&h) && f.contains(&t)));
+        for v in faces.iter_mut().flatten() {
+            if *v == h {
+                *v = t;
+            }
+        }
+        alive[h as usize] = false;
+        held[h as usize] = false;
+    }
+}
+
+/// The vertices sharing a face with `v`, ascending.
+fn neighbours(faces: &[[u32; 3]], v: u32) -> Vec<u32> {
+    let mut ring: Vec<u32> = faces
+        .iter()
+        .filter(|f| f.contains(&v))
+        .flatten()
+        .copied()
+        .filter(|&u| u != v)
+        .collect();
+    ring.sort_unstable();
+    ring.dedup();
+    ring
+}
+
+/// Whether `v` lies on an edge with one face.
+fn on_border(faces: &[[u32; 3]], v: u32) -> bool {
+    neighbours(faces, v)
+        .into_iter()
+        .any(|u| edge_faces(faces, v, u).count() == 1)
+}
+
+/// The faces holding both `a` and `b`.
+fn edge_faces(faces: &[[u32; 3]], a: u32, b: u32) -> impl Iterator<Item = &[u32; 3]> {
+    faces
+        .iter()
+        .filter(move |f| f.contains(&a) && f.contains(&b))
+}
+
+/// The link condition for collapsing the edge `(a, b)` of a 2-manifold: every common
+/// neighbour is the apex of a face on the edge, and the edge is on the border if both ends
+/// are.
+fn link_condition_holds(faces: &[[u32; 3]], a: u32, b: u32) -> bool {
+    let ring_b = neighbours(faces, b);
+    let apexes: Vec<u32> = edge_faces(faces, a, b)
+        .flatten()
+        .copied()
+        .filter(|&v| v != a && v != b)
+        .collect();
+    let common_are_apexes = neighbours(faces, a)
+        .into_iter()
+        .filter(|v| ring_b.contains(v))
+        .all(|v| apexes.contains(&v));
+    let border_edge = apexes.len() == 1;
+    common_are_apexes && (border_edge || !(on_border(faces, a) && on_border(faces, b)))
+}
+
+/// The smallest cosine between a face's normal before and after `h` moves onto `t`, over the
+/// faces of `h` that survive the collapse; −1 for a face that becomes degenerate.
+fn worst_normal_cos(positions: &[[f32; 3]], faces: &[[u32; 3]], h: u32, t: u32) -> f64 {
+    let corners = |f: [u32; 3]| f.map(|v| positions[v as usize]);
+    faces
+        .iter()
+        .filter(|f| f.contains(&h) && !f.contains(&t))
+        .map(|&f| {
+            let before = triangle_cross(corners(f));
+            let after = triangle_cross(corners(f.map(|v| if v == h { t } else { v })));
+            let scale = norm(before) * norm(after);
+            if scale > 0.0 {
+                dot(before, after) / scale
+            } else {
+                -1.0
+            }
+        })
+        .fold(1.0, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshgnn_geometry::{TriMesh, icosphere, is_edge_manifold, is_watertight};
+
+    #[test]
+    fn held_vertices_fold_down_to_the_bound_and_the_sphere_stays_closed() {
+        let sphere = icosphere(1); // 42 vertices, 80 faces
+        let mut faces = sphere.triangles().to_vec();
+        // Every vertex but the first four is held.
+        let mut held: Vec<bool> = (0..42).map(|v| v >= 4).collect();
+        fold_held_vertices(sphere.vertices(), &mut faces, &mut held, 3);
+        assert_eq!(held.iter().filter(|&&h| h).count(), 3);
+        // A closed genus-0 surface over 4 + 3 vertices has 2 · 7 − 4 faces.
+        assert_eq!(faces.len(), 10);
+        let folded = TriMesh::new(sphere.vertices().to_vec(), faces).unwrap();
+        assert!(is_watertight(&folded) && is_edge_manifold(&folded));
+    }
+
+    #[test]
+    fn a_tetrahedron_is_left_whole() {
+        let sphere = icosphere(1);
+        let mut faces = sphere.triangles().to_vec();
+        let mut held = vec![true; 42];
+        fold_held_vertices(sphere.vertices(), &mut faces, &mut held, 0);
+        // Four vertices are the fewest a closed surface has.
+        assert_eq!(faces.len(), 4);
+        assert_eq!(held.iter().filter(|&&h| h).count(), 4);
+    }
+
+    #[test]
+    fn the_link_condition_refuses_a_collapse_that_pinches() {
+        // Triangular bipyramid: apexes 0 and 1, equator 2, 3, 4.
+        let faces = vec![
+            [0, 2, 3],
+            [0, 3, 4],
+            [0, 4, 2],
+            [1, 3, 2],
+            [1, 4, 3],
+            [1, 2, 4],
+        ];
+        // Equator edge (2, 3): common neighbours 0 and 1 (its apexes) and 4, which is not:
+        // collapsing it would pinch the surface into two sheets along (survivor, 4).
+        assert!(!link_condition_holds(&faces, 2, 3));
+        // Apex-to-equator edge (0, 2): common neighbours 3 and 4, its apexes.
+        assert!(link_condition_holds(&faces, 0, 2));
+    }
+}
