@@ -20,98 +20,155 @@ pub(crate) fn fold_held_vertices(
     held: &mut [bool],
     max_held: usize,
 ) {
-    let mut alive = vec![false; positions.len()];
-    for &v in faces.iter().flatten() {
-        alive[v as usize] = true;
-    }
-    loop {
-        let held_count = (0..held.len()).filter(|&v| held[v] && alive[v]).count();
-        let live_count = alive.iter().filter(|&&a| a).count();
-        if held_count <= max_held || live_count <= 4 {
-            return;
-        }
-        let best = (0..held.len() as u32)
-            .filter(|&h| held[h as usize] && alive[h as usize])
-            .flat_map(|h| neighbours(faces, h).into_iter().map(move |t| (h, t)))
-            .filter(|&(h, t)| link_condition_holds(faces, h, t))
-            .map(|(h, t)| (worst_normal_cos(positions, faces, h, t), h, t))
+    let mut surface = Surface::new(positions.len(), std::mem::take(faces));
+    let mut live = (0..positions.len() as u32)
+        .filter(|&v| !surface.fan(v).is_empty())
+        .count();
+    let mut held_live: Vec<u32> = (0..held.len() as u32)
+        .filter(|&v| held[v as usize] && !surface.fan(v).is_empty())
+        .collect();
+    while held_live.len() > max_held && live > 4 {
+        let best = held_live
+            .iter()
+            .flat_map(|&h| surface.neighbours(h).into_iter().map(move |t| (h, t)))
+            .filter(|&(h, t)| surface.link_condition_holds(h, t))
+            .map(|(h, t)| (surface.worst_normal_cos(positions, h, t), h, t))
             .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)).then(b.2.cmp(&a.2)));
-        let Some((_, h, t)) = best else { return };
-        faces.retain(|f| !(f.contains(&h) && f.contains(&t)));
-        for v in faces.iter_mut().flatten() {
-            if *v == h {
-                *v = t;
+        let Some((_, h, t)) = best else { break };
+        surface.collapse(h, t);
+        held[h as usize] = false;
+        held_live.retain(|&v| v != h);
+        live -= 1;
+    }
+    *faces = surface.into_faces();
+}
+
+/// A small triangle surface with the faces around each vertex, for collapses.
+struct Surface {
+    faces: Vec<[u32; 3]>,
+    alive: Vec<bool>,
+    /// Per vertex, its faces (ascending; only live ones).
+    fans: Vec<Vec<u32>>,
+}
+
+impl Surface {
+    fn new(vertex_count: usize, faces: Vec<[u32; 3]>) -> Self {
+        let mut fans = vec![Vec::new(); vertex_count];
+        for (f, t) in faces.iter().enumerate() {
+            for &v in t {
+                fans[v as usize].push(f as u32);
             }
         }
-        alive[h as usize] = false;
-        held[h as usize] = false;
+        Self {
+            alive: vec![true; faces.len()],
+            faces,
+            fans,
+        }
     }
-}
 
-/// The vertices sharing a face with `v`, ascending.
-fn neighbours(faces: &[[u32; 3]], v: u32) -> Vec<u32> {
-    let mut ring: Vec<u32> = faces
-        .iter()
-        .filter(|f| f.contains(&v))
-        .flatten()
-        .copied()
-        .filter(|&u| u != v)
-        .collect();
-    ring.sort_unstable();
-    ring.dedup();
-    ring
-}
+    /// The live faces around `v`.
+    fn fan(&self, v: u32) -> &[u32] {
+        &self.fans[v as usize]
+    }
 
-/// Whether `v` lies on an edge with one face.
-fn on_border(faces: &[[u32; 3]], v: u32) -> bool {
-    neighbours(faces, v)
-        .into_iter()
-        .any(|u| edge_faces(faces, v, u).count() == 1)
-}
+    /// The vertices sharing a face with `v`, ascending.
+    fn neighbours(&self, v: u32) -> Vec<u32> {
+        let mut ring: Vec<u32> = self
+            .fan(v)
+            .iter()
+            .flat_map(|&f| self.faces[f as usize])
+            .filter(|&u| u != v)
+            .collect();
+        ring.sort_unstable();
+        ring.dedup();
+        ring
+    }
 
-/// The faces holding both `a` and `b`.
-fn edge_faces(faces: &[[u32; 3]], a: u32, b: u32) -> impl Iterator<Item = &[u32; 3]> {
-    faces
-        .iter()
-        .filter(move |f| f.contains(&a) && f.contains(&b))
-}
+    /// The live faces holding both `a` and `b`.
+    fn edge_faces(&self, a: u32, b: u32) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.fan(a)
+            .iter()
+            .map(|&f| self.faces[f as usize])
+            .filter(move |t| t.contains(&b))
+    }
 
-/// The link condition for collapsing the edge `(a, b)` of a 2-manifold: every common
-/// neighbour is the apex of a face on the edge, and the edge is on the border if both ends
-/// are.
-fn link_condition_holds(faces: &[[u32; 3]], a: u32, b: u32) -> bool {
-    let ring_b = neighbours(faces, b);
-    let apexes: Vec<u32> = edge_faces(faces, a, b)
-        .flatten()
-        .copied()
-        .filter(|&v| v != a && v != b)
-        .collect();
-    let common_are_apexes = neighbours(faces, a)
-        .into_iter()
-        .filter(|v| ring_b.contains(v))
-        .all(|v| apexes.contains(&v));
-    let border_edge = apexes.len() == 1;
-    common_are_apexes && (border_edge || !(on_border(faces, a) && on_border(faces, b)))
-}
+    /// Whether `v` lies on an edge with one face.
+    fn on_border(&self, v: u32) -> bool {
+        self.neighbours(v)
+            .into_iter()
+            .any(|u| self.edge_faces(v, u).count() == 1)
+    }
 
-/// The smallest cosine between a face's normal before and after `h` moves onto `t`, over the
-/// faces of `h` that survive the collapse; −1 for a face that becomes degenerate.
-fn worst_normal_cos(positions: &[[f32; 3]], faces: &[[u32; 3]], h: u32, t: u32) -> f64 {
-    let corners = |f: [u32; 3]| f.map(|v| positions[v as usize]);
-    faces
-        .iter()
-        .filter(|f| f.contains(&h) && !f.contains(&t))
-        .map(|&f| {
-            let before = triangle_cross(corners(f));
-            let after = triangle_cross(corners(f.map(|v| if v == h { t } else { v })));
-            let scale = norm(before) * norm(after);
-            if scale > 0.0 {
-                dot(before, after) / scale
+    /// The link condition for collapsing the edge `(a, b)` of a 2-manifold: every common
+    /// neighbour is the apex of a face on the edge, and the edge is on the border if both
+    /// ends are.
+    fn link_condition_holds(&self, a: u32, b: u32) -> bool {
+        let ring_b = self.neighbours(b);
+        let apexes: Vec<u32> = self
+            .edge_faces(a, b)
+            .flatten()
+            .filter(|&v| v != a && v != b)
+            .collect();
+        let common_are_apexes = self
+            .neighbours(a)
+            .into_iter()
+            .filter(|v| ring_b.contains(v))
+            .all(|v| apexes.contains(&v));
+        let border_edge = apexes.len() == 1;
+        common_are_apexes && (border_edge || !(self.on_border(a) && self.on_border(b)))
+    }
+
+    /// The smallest cosine between a face's normal before and after `h` moves onto `t`, over
+    /// the faces of `h` that survive the collapse; −1 for a face that becomes degenerate.
+    fn worst_normal_cos(&self, positions: &[[f32; 3]], h: u32, t: u32) -> f64 {
+        let corners = |f: [u32; 3]| f.map(|v| positions[v as usize]);
+        self.fan(h)
+            .iter()
+            .map(|&f| self.faces[f as usize])
+            .filter(|f| !f.contains(&t))
+            .map(|f| {
+                let before = triangle_cross(corners(f));
+                let after = triangle_cross(corners(f.map(|v| if v == h { t } else { v })));
+                let scale = norm(before) * norm(after);
+                if scale > 0.0 {
+                    dot(before, after) / scale
+                } else {
+                    -1.0
+                }
+            })
+            .fold(1.0, f64::min)
+    }
+
+    /// Moves `h` onto `t`: the faces on the edge die, the others of `h` become `t`'s.
+    fn collapse(&mut self, h: u32, t: u32) {
+        for f in std::mem::take(&mut self.fans[h as usize]) {
+            let face = &mut self.faces[f as usize];
+            if face.contains(&t) {
+                self.alive[f as usize] = false;
+                for v in *face {
+                    if v != h {
+                        self.fans[v as usize].retain(|&g| g != f);
+                    }
+                }
             } else {
-                -1.0
+                for v in face.iter_mut() {
+                    if *v == h {
+                        *v = t;
+                    }
+                }
+                self.fans[t as usize].push(f);
             }
-        })
-        .fold(1.0, f64::min)
+        }
+    }
+
+    /// The live faces, in their input order.
+    fn into_faces(self) -> Vec<[u32; 3]> {
+        self.faces
+            .into_iter()
+            .zip(self.alive)
+            .filter_map(|(t, alive)| alive.then_some(t))
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -157,8 +214,9 @@ mod tests {
         ];
         // Equator edge (2, 3): common neighbours 0 and 1 (its apexes) and 4, which is not:
         // collapsing it would pinch the surface into two sheets along (survivor, 4).
-        assert!(!link_condition_holds(&faces, 2, 3));
+        let surface = Surface::new(5, faces);
+        assert!(!surface.link_condition_holds(2, 3));
         // Apex-to-equator edge (0, 2): common neighbours 3 and 4, its apexes.
-        assert!(link_condition_holds(&faces, 0, 2));
+        assert!(surface.link_condition_holds(0, 2));
     }
 }
