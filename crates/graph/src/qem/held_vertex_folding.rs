@@ -174,7 +174,9 @@ impl Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use meshgnn_geometry::{TriMesh, icosphere, is_edge_manifold, is_watertight};
+    use meshgnn_geometry::{
+        TriMesh, icosphere, is_edge_manifold, is_vertex_manifold, is_watertight,
+    };
 
     #[test]
     fn held_vertices_fold_down_to_the_bound_and_the_sphere_stays_closed() {
@@ -188,6 +190,81 @@ mod tests {
         assert_eq!(faces.len(), 10);
         let folded = TriMesh::new(sphere.vertices().to_vec(), faces).unwrap();
         assert!(is_watertight(&folded) && is_edge_manifold(&folded));
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// Any held vertices of a noisy sphere, any bound: the surface stays closed and a
+        /// 2-manifold (each edge two faces, each vertex one fan), the genus-0 count of faces
+        /// holds, kept vertices all stay, and held ones go down to the bound or to four
+        /// vertices in all.
+        #[test]
+        fn folding_keeps_a_closed_two_manifold(
+            stride in 2usize..80,
+            salt in 0u32..1000,
+            max_held in 0usize..30,
+            noise in 0.0f32..0.4,
+        ) {
+            let sphere = icosphere(2); // 162 vertices
+            let positions: Vec<[f32; 3]> = sphere
+                .vertices()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let wobble = ((i as u32).wrapping_mul(2_654_435_761) ^ salt) % 1000;
+                    let wobble = wobble as f32 / 1000.0;
+                    p.map(|x| x * (1.0 + noise * (wobble - 0.5)))
+                })
+                .collect();
+            let mut faces = sphere.triangles().to_vec();
+            let mut held: Vec<bool> = (0..162usize)
+                .map(|v| !(v + salt as usize).is_multiple_of(stride))
+                .collect();
+            let kept: Vec<usize> = (0..162).filter(|&v| !held[v]).collect();
+            fold_held_vertices(&positions, &mut faces, &mut held, max_held);
+            let folded = TriMesh::new(positions, faces).unwrap();
+            proptest::prop_assert!(is_watertight(&folded) && is_edge_manifold(&folded));
+            proptest::prop_assert!(is_vertex_manifold(&folded));
+            let mut used = [false; 162];
+            for &v in folded.triangles().iter().flatten() {
+                used[v as usize] = true;
+            }
+            let live = used.iter().filter(|&&u| u).count();
+            proptest::prop_assert_eq!(folded.face_count(), 2 * live - 4);
+            proptest::prop_assert!(kept.iter().all(|&v| used[v]));
+            let held_left = (0..162).filter(|&v| held[v] && used[v]).count();
+            proptest::prop_assert!(held_left <= max_held || live == 4);
+            // A vertex no longer used is no longer held.
+            proptest::prop_assert!((0..162).all(|v| used[v] || !held[v]));
+        }
+    }
+
+    #[test]
+    fn a_pinching_collapse_loses_to_one_that_turns_faces_more() {
+        // Triangular bipyramid (apexes 0 and 1, equator 2, 3, 4) with 3 just beside 2:
+        // moving 3 onto 2 turns no face much, but 2 and 3 share a third neighbour, 4, so it
+        // would leave two faces on one triangle. Only the collapses onto an apex are allowed.
+        let positions = vec![
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.95, 0.3, 0.0],
+            [-0.5, -0.8, 0.0],
+        ];
+        let mut faces = vec![
+            [0, 2, 3],
+            [0, 3, 4],
+            [0, 4, 2],
+            [1, 3, 2],
+            [1, 4, 3],
+            [1, 2, 4],
+        ];
+        let mut held = vec![false, false, false, true, false];
+        fold_held_vertices(&positions, &mut faces, &mut held, 0);
+        assert_eq!(faces.len(), 4);
+        let tetrahedron = TriMesh::new(positions, faces).unwrap();
+        assert!(is_watertight(&tetrahedron) && is_edge_manifold(&tetrahedron));
+        assert!(!held[3]);
     }
 
     #[test]
