@@ -47,7 +47,7 @@ pub(crate) fn fold_held_vertices(
 struct Surface {
     faces: Vec<[u32; 3]>,
     alive: Vec<bool>,
-    /// Per vertex, its faces (ascending; only live ones).
+    /// Per vertex, its live faces.
     fans: Vec<Vec<u32>>,
 }
 
