@@ -174,6 +174,16 @@ impl Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A triangular bipyramid: apexes 0 and 1, equator 2, 3, 4.
+    const BIPYRAMID: [[u32; 3]; 6] = [
+        [0, 2, 3],
+        [0, 3, 4],
+        [0, 4, 2],
+        [1, 3, 2],
+        [1, 4, 3],
+        [1, 2, 4],
+    ];
     use meshgnn_geometry::{
         TriMesh, icosphere, is_edge_manifold, is_vertex_manifold, is_watertight,
     };
@@ -241,7 +251,7 @@ mod tests {
 
     #[test]
     fn a_pinching_collapse_loses_to_one_that_turns_faces_more() {
-        // Triangular bipyramid (apexes 0 and 1, equator 2, 3, 4) with 3 just beside 2:
+        // The bipyramid with 3 just beside 2:
         // moving 3 onto 2 turns no face much, but 2 and 3 share a third neighbour, 4, so it
         // would leave two faces on one triangle. Only the collapses onto an apex are allowed.
         let positions = vec![
@@ -251,14 +261,7 @@ mod tests {
             [0.95, 0.3, 0.0],
             [-0.5, -0.8, 0.0],
         ];
-        let mut faces = vec![
-            [0, 2, 3],
-            [0, 3, 4],
-            [0, 4, 2],
-            [1, 3, 2],
-            [1, 4, 3],
-            [1, 2, 4],
-        ];
+        let mut faces = BIPYRAMID.to_vec();
         let mut held = vec![false, false, false, true, false];
         fold_held_vertices(&positions, &mut faces, &mut held, 0);
         assert_eq!(faces.len(), 4);
@@ -280,18 +283,9 @@ mod tests {
 
     #[test]
     fn the_link_condition_refuses_a_collapse_that_pinches() {
-        // Triangular bipyramid: apexes 0 and 1, equator 2, 3, 4.
-        let faces = vec![
-            [0, 2, 3],
-            [0, 3, 4],
-            [0, 4, 2],
-            [1, 3, 2],
-            [1, 4, 3],
-            [1, 2, 4],
-        ];
         // Equator edge (2, 3): common neighbours 0 and 1 (its apexes) and 4, which is not:
         // collapsing it would pinch the surface into two sheets along (survivor, 4).
-        let surface = Surface::new(5, faces);
+        let surface = Surface::new(5, BIPYRAMID.to_vec());
         assert!(!surface.link_condition_holds(2, 3));
         // Apex-to-equator edge (0, 2): common neighbours 3 and 4, its apexes.
         assert!(surface.link_condition_holds(0, 2));
