@@ -41,43 +41,43 @@ pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
-    fill(mesh, max_edges, &[], false)
+    fill(mesh, max_edges, &mut |_| true, false)
 }
 
-/// [`fill_holes`] leaving open every hole with a corner `v` where `kept_open[v]` (vertices
-/// past its end are not) and every hole whose least-area patch would repeat a face on the same
-/// corners (the rim of a lone face or of two faces on an edge: filled, a flat two-sided
-/// pillow): a simplifier closes the cracks it made and keeps the input's borders.
+/// [`fill_holes`] leaving open every hole whose patch `closable` refuses (its triangles; a
+/// centre vertex has the index after the last vertex), and every hole whose least-area patch would
+/// repeat a face on the same corners (the rim of a lone face or of two faces on an edge:
+/// filled, a flat two-sided pillow): a simplifier closes the cracks it made and keeps the
+/// input's borders.
 ///
 /// ```
-/// use meshgnn_geometry::{boundary_loops, fill_holes_away_from, icosphere, TriMesh};
+/// use meshgnn_geometry::{boundary_loops, fill_holes_where, icosphere, TriMesh};
 /// let sphere = icosphere(2);
 /// let mut faces = sphere.triangles().to_vec();
 /// let hole = faces.pop().unwrap();
 /// let open = TriMesh::new(sphere.vertices().to_vec(), faces)?;
-/// let mut kept_open = vec![false; sphere.vertex_count()];
-/// assert!(boundary_loops(&fill_holes_away_from(&open, 30, &kept_open)?).is_empty());
-/// kept_open[hole[0] as usize] = true;
-/// assert_eq!(boundary_loops(&fill_holes_away_from(&open, 30, &kept_open)?).len(), 1);
+/// assert!(boundary_loops(&fill_holes_where(&open, 30, |_| true)?).is_empty());
+/// let away_from_corner = |patch: &[[u32; 3]]| patch.iter().all(|t| !t.contains(&hole[0]));
+/// assert_eq!(boundary_loops(&fill_holes_where(&open, 30, away_from_corner)?).len(), 1);
 /// // A lone face is left: its patch would be the same face turned over.
 /// let lone = TriMesh::new(sphere.vertices().to_vec(), vec![hole])?;
-/// assert_eq!(fill_holes_away_from(&lone, 30, &[])?.face_count(), 1);
+/// assert_eq!(fill_holes_where(&lone, 30, |_| true)?.face_count(), 1);
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
-pub fn fill_holes_away_from(
+pub fn fill_holes_where(
     mesh: &TriMesh,
     max_edges: usize,
-    kept_open: &[bool],
+    mut closable: impl FnMut(&[[u32; 3]]) -> bool,
 ) -> Result<TriMesh> {
-    fill(mesh, max_edges, kept_open, true)
+    fill(mesh, max_edges, &mut closable, true)
 }
 
-/// The filling of [`fill_holes`] and [`fill_holes_away_from`]: with `refuse_pillows` a hole
+/// The filling of [`fill_holes`] and [`fill_holes_where`]: with `refuse_pillows` a hole
 /// whose least-area patch repeats an existing face's corners stays open.
 fn fill(
     mesh: &TriMesh,
     max_edges: usize,
-    kept_open: &[bool],
+    closable: &mut dyn FnMut(&[[u32; 3]]) -> bool,
     refuse_pillows: bool,
 ) -> Result<TriMesh> {
     if max_edges > MAX_FILLED_HOLE_EDGES {
@@ -110,17 +110,18 @@ fn fill(
     for hole in loops.iter().flat_map(|hole| simple_loops(hole)) {
         let k = hole.len();
         let closes = (0..k).all(|i| boundary.contains(&key(hole[i], hole[(i + 1) % k])));
-        let open = hole
-            .iter()
-            .any(|&v| kept_open.get(v as usize) == Some(&true));
-        if !(3..=max_edges).contains(&k) || !closes || open {
+        if !(3..=max_edges).contains(&k) || !closes {
             continue;
         }
-        let patch = match least_area_triangulation(&vertices, &hole, &edges) {
+        let (patch, centre) = match least_area_triangulation(&vertices, &hole, &edges) {
             Some(patch) if patch.iter().any(|t| corner_sets.contains(&sorted(*t))) => continue,
-            Some(patch) => patch,
-            None => centre_fan(&mut vertices, &hole),
+            Some(patch) => (patch, None),
+            None => centre_fan(&vertices, &hole),
         };
+        if !closable(&patch) {
+            continue;
+        }
+        vertices.extend(centre);
         for &[a, b, c] in &patch {
             edges.extend([key(a, b), key(b, c), key(c, a)]);
         }
@@ -135,20 +136,20 @@ fn sorted(mut t: [u32; 3]) -> [u32; 3] {
     t
 }
 
-/// A new vertex at the mean of the corners of the closed polygon `hole`, appended to
-/// `vertices`, and the fan of triangles from it, each running its polygon side backwards
-/// (like [`least_area_triangulation`]'s).
-fn centre_fan(vertices: &mut Vec<[f32; 3]>, hole: &[u32]) -> Vec<[u32; 3]> {
+/// The fan of triangles from a new vertex at the mean of the corners of the closed polygon
+/// `hole`, each running its polygon side backwards (like [`least_area_triangulation`]'s), and
+/// that vertex, to be appended to `vertices`.
+fn centre_fan(vertices: &[[f32; 3]], hole: &[u32]) -> (Vec<[u32; 3]>, Option<[f32; 3]>) {
     let k = hole.len();
     let sum = hole.iter().fold([0.0f64; 3], |s, &v| {
         let p = vertices[v as usize];
         std::array::from_fn(|i| s[i] + f64::from(p[i]))
     });
     let centre = vertices.len() as u32;
-    vertices.push(sum.map(|x| (x / k as f64) as f32));
-    (0..k)
+    let fan = (0..k)
         .map(|i| [hole[(i + 1) % k], hole[i], centre])
-        .collect()
+        .collect();
+    (fan, Some(sum.map(|x| (x / k as f64) as f32)))
 }
 
 /// The closed walk `hole` cut into simple loops at every vertex it passes twice, each in the
@@ -375,8 +376,8 @@ mod tests {
         assert!(is_watertight(&closed) && is_edge_manifold(&closed));
         assert_eq!(closed.vertex_count(), v.len() + 1);
         assert_eq!(closed.face_count(), open.face_count() + 4);
-        // Away from any kept-open corner the same: a fan repeats no face's corners.
-        let away = fill_holes_away_from(&open, 30, &[]).unwrap();
+        // Where every hole may close, the same: a fan repeats no face's corners.
+        let away = fill_holes_where(&open, 30, |_| true).unwrap();
         assert_eq!(away.vertices(), closed.vertices());
         assert_eq!(away.triangles(), closed.triangles());
         let centre = closed.vertices()[v.len()];

@@ -101,7 +101,7 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
-pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes, fill_holes_away_from};
+pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes, fill_holes_where};
 pub use input_content::{
     InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points, read_input_mesh,
     read_input_point_cloud,
@@ -131,6 +131,6 @@ pub use tangent_chart_triangulation::{
 pub use vertex_normals::vertex_normals;
 pub use voronoi_dual::{
     geodesic_voronoi_regions, nearest_seed_dual_triangles, nearest_seed_regions, seed_of_vertex,
-    voronoi_dual_triangles,
+    voronoi_dual_edges, voronoi_dual_triangles,
 };
 pub use watertight::is_watertight;

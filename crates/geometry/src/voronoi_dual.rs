@@ -87,6 +87,35 @@ pub fn voronoi_dual_triangles(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32;
     ))
 }
 
+/// The dual edges of [`geodesic_voronoi_regions`]: the pairs of seeds (`[a, b]` indexes
+/// `seeds`, `a < b`) whose regions meet across an edge of the mesh, sorted. Two seeds so joined
+/// are connected by the surface between them; across a hole or a gap they are not.
+///
+/// ```
+/// use meshgnn_geometry::{icosphere, voronoi_dual_edges};
+/// let sphere = icosphere(1);
+/// // Every vertex a seed: the dual edges are the mesh's edges, 120 for an icosphere(1).
+/// let all: Vec<u32> = (0..sphere.vertex_count() as u32).collect();
+/// let edges = voronoi_dual_edges(&sphere, &all)?;
+/// assert_eq!(edges.len(), 120);
+/// assert!(sphere.triangles().iter().all(|&[a, b, _]| edges.contains(&[a.min(b), a.max(b)])));
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn voronoi_dual_edges(mesh: &TriMesh, seeds: &[u32]) -> Result<Vec<[u32; 2]>> {
+    let region = geodesic_voronoi_regions(mesh, seeds)?;
+    let mut edges: Vec<[u32; 2]> = mesh
+        .triangles()
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .map(|(a, b)| (region[a as usize], region[b as usize]))
+        .filter(|&(ra, rb)| ra != rb && ra != u32::MAX && rb != u32::MAX)
+        .map(|(ra, rb)| [ra.min(rb), ra.max(rb)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    Ok(edges)
+}
+
 /// Seeds nearest a vertex among which [`nearest_seed_regions`] looks for one facing its way.
 const FACING_CANDIDATES: usize = 8;
 
