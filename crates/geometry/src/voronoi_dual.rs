@@ -245,6 +245,15 @@ mod tests {
             voronoi_dual_triangles(&mesh, &seeds).unwrap(),
             vec![[0, 1, 3], [0, 3, 2]]
         );
+        // Their five edges; seeds 1 and 2 (vertices 3 and 4) are not joined.
+        assert_eq!(
+            voronoi_dual_edges(&mesh, &seeds).unwrap(),
+            vec![[0, 1], [0, 2], [0, 3], [1, 3], [2, 3]]
+        );
+        // Without the first cell, vertices 0 and 4 are in no face: seeds 0 and 2 are joined
+        // to nothing, and the rest of the strip is split between seeds 1 and 3.
+        let cut = TriMesh::new(mesh.vertices().to_vec(), mesh.triangles()[2..].to_vec()).unwrap();
+        assert_eq!(voronoi_dual_edges(&cut, &seeds).unwrap(), vec![[1, 3]]);
     }
 
     #[test]
