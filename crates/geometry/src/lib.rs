@@ -45,6 +45,7 @@ mod graph_laplacian;
 mod hole_filling;
 mod input_content;
 mod laplacian_eigenvectors;
+mod lone_face_closing;
 mod manifold;
 mod manifold_face_selection;
 mod mass_matrix;
@@ -107,6 +108,7 @@ pub use input_content::{
     read_input_point_cloud,
 };
 pub use laplacian_eigenvectors::{LaplacianEigenpairs, laplacian_eigenvectors};
+pub use lone_face_closing::{LONE_FACE_REACH, MIN_LONE_FACE_DEPTH, close_lone_faces};
 pub use manifold::{is_edge_manifold, is_vertex_manifold, non_manifold_vertices};
 pub use manifold_face_selection::select_manifold_faces;
 pub use mass_matrix::lumped_mass_matrix;

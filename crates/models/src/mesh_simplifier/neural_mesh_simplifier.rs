@@ -21,7 +21,9 @@
 //! [`voronoi_dual_edges`], with a centre vertex where no triangulation of a crack's corners
 //! fits), rebuilds each small closed part still left open as QEM connects its
 //! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis),
-//! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`]) —
+//! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`]),
+//! closes each face no other face touches into a tetrahedron over the input behind it
+//! ([`close_lone_faces`], a thin tip of a closed part) —
 //! these steps decide the faces on the selected vertices before any moves — and, when asked,
 //! instead of the cracks closes the holes left after the placement: first the cracks a
 //! rejected candidate covers ([`meshgnn_geometry::close_cracks`]), then
@@ -50,10 +52,10 @@ use candle_core::{Device, Tensor};
 use candle_nn::VarBuilder;
 use meshgnn_geometry::{
     MIN_COMPONENT_SEEDS, OpenPart, PartSurface, TriMesh, boundary_loops, close_cracks,
-    component_seed_floor, connected_components, fill_holes, fill_holes_where, flip_caps,
-    hull_small_open_parts, nearest_seed_dual_triangles, on_border, rebuild_small_open_parts,
-    remove_flaps, remove_overlays, select_manifold_faces, unit_sphere_normalization,
-    vertex_normals, voronoi_dual_edges,
+    close_lone_faces, component_seed_floor, connected_components, fill_holes, fill_holes_where,
+    flip_caps, hull_small_open_parts, nearest_seed_dual_triangles, on_border,
+    rebuild_small_open_parts, remove_flaps, remove_overlays, select_manifold_faces,
+    unit_sphere_normalization, vertex_normals, voronoi_dual_edges,
 };
 use meshgnn_graph::{
     CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order, kept_vertex_connectivity,
@@ -538,6 +540,9 @@ impl NeuralMeshSimplifier {
             |part| qem_connected_part(mesh, &vertex_map, part),
         )?;
         let selected = remove_flaps(&selected, || on_open_parts(mesh, &vertex_map));
+        let selected = close_lone_faces(mesh, &vertex_map, &selected, || {
+            on_open_parts(mesh, &vertex_map)
+        })?;
         let vertices = match regions {
             None => selected.vertices().to_vec(),
             Some(regions) => region_quadric_placement(mesh, regions?, &vertex_map, &selected)?,
