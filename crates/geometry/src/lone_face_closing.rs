@@ -19,12 +19,13 @@ pub const LONE_FACE_REACH: f64 = 2.0;
 pub const MIN_LONE_FACE_DEPTH: f64 = 0.1;
 
 /// `selected` with each lone face closed into a tetrahedron (module docs). A face is lone when
-/// none of its corners is in another face; it is closed when its corners stand for input
-/// vertices (output vertex `i < kept.len()` stands for input vertex `kept[i]`) none of which
-/// `on_open_part` marks (called only when a lone face exists), over the input vertex reached from them along input edges within
-/// [`LONE_FACE_REACH`] longest edges of the face's centroid that lies farthest behind the
-/// face (against its normal), at least [`MIN_LONE_FACE_DEPTH`] longest edges deep. That
-/// vertex is appended at its input position, the three new faces run the lone face's edges
+/// none of its corners is in another face. It is closed when its corners stand for input
+/// vertices (output vertex `i < kept.len()` stands for input vertex `kept[i]`) that
+/// `on_open_part` does not mark (per output vertex; called only when a lone face exists). Its
+/// apex: of the input vertices reached from the corners along input edges within
+/// [`LONE_FACE_REACH`] longest edges of the face's centroid, the one farthest behind the face
+/// (against its normal), if at least [`MIN_LONE_FACE_DEPTH`] longest edges deep. The apex is
+/// appended at its input position and the three new faces run the lone face's edges
 /// backwards, so the tetrahedron is closed and oriented as the face; lone faces are taken in
 /// face order. Errors when `kept` is longer than the output's vertices or names a vertex
 /// `input` lacks.
@@ -105,7 +106,7 @@ pub fn close_lone_faces(
         let within = |v: u32| {
             norm(sub(to_f64(input.vertices()[v as usize]), centroid)) <= LONE_FACE_REACH * longest
         };
-        // Breadth first from the corners' input vertices, within reach of the centroid.
+        // A walk from the corners' input vertices along input edges, within reach.
         let mut queue: Vec<u32> = [a, b, c].map(|v| kept[v as usize]).to_vec();
         for &v in &queue {
             visited[v as usize] = true;
