@@ -45,7 +45,6 @@
 //!   placed; the centre vertices of filled holes and the vertices a rebuilt part holds
 //!   follow them.
 
-use std::collections::HashSet;
 use std::panic::resume_unwind;
 
 use candle_core::{Device, Tensor};
@@ -638,11 +637,11 @@ fn on_open_parts(input: &TriMesh, vertex_map: &[u32]) -> Vec<bool> {
 
 /// Holes of at most this many edges are closed by default (beside the input's border, only
 /// where the input joins their corners): one or two faces the classifier left out, a crack
-/// rather than a feature. Over seeds 0-3 against leaving them (docs/mesh_simplifier_model.md, "Cracks closed
-/// by default"): WA after the pass on the test families 0.2 / 0.1 / 0.2 / 0.2 → 0.2 / 0.0 /
-/// 0.0 / 0.0 % with CD unchanged, LE on the real set below QEM's at every ratio; 8 everywhere
-/// tied with 4 on the synthetic sets but raised the real set's CD at 20 % from 1.94 to 2.30×
-/// QEM's: in a piece of a few faces such a hole is the piece's own outline.
+/// rather than a feature. Over seeds 0-3 against leaving them (docs/mesh_simplifier_model.md,
+/// "Cracks closed by default"): WA after the pass on the test families 0.2 / 0.1 / 0.2 / 0.2 →
+/// 0.2 / 0.0 / 0.0 / 0.0 % with CD unchanged, LE on the real set below QEM's at every ratio; 8
+/// everywhere tied with 4 on the synthetic sets but raised the real set's CD at 20 % from 1.94
+/// to 2.30× QEM's: in a piece of a few faces such a hole is the piece's own outline.
 pub const MAX_CRACK_EDGES: usize = 4;
 
 /// Holes of up to this many edges are cracks too in a piece of at least
@@ -676,10 +675,11 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
     for (&v, border) in corners.iter().zip(on_border(input, &standing_for)) {
         on_input_border[v as usize] = border;
     }
-    let joined: HashSet<[u32; 2]> = if on_input_border.contains(&true) {
-        voronoi_dual_edges(input, vertex_map)?.into_iter().collect()
+    // Sorted: searched by halving.
+    let joined: Vec<[u32; 2]> = if on_input_border.contains(&true) {
+        voronoi_dual_edges(input, vertex_map)?
     } else {
-        HashSet::new()
+        Vec::new()
     };
     // Indices past the kept vertices (hull_small_open_parts adds none) are centre vertices,
     // joined to their hole's corners.
@@ -691,9 +691,9 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
             .any(|&v| kept(v) && on_input_border[v as usize]);
         !beside_border
             || patch.iter().all(|&[a, b, c]| {
-                [(a, b), (b, c), (c, a)]
-                    .iter()
-                    .all(|&(u, w)| !kept(u) || !kept(w) || joined.contains(&[u.min(w), u.max(w)]))
+                [(a, b), (b, c), (c, a)].iter().all(|&(u, w)| {
+                    !kept(u) || !kept(w) || joined.binary_search(&[u.min(w), u.max(w)]).is_ok()
+                })
             })
     };
     let cracks_closed = fill_holes_where(selected, MAX_CRACK_EDGES, crack)?;
