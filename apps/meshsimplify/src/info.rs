@@ -3,7 +3,8 @@
 //! The `--json` keys are a stable interface for scripts (documented in docs/meshsimplify.md):
 //! `file`, `vertices`, `faces`, `edges`, `bbox_min`, `bbox_max`, `edge_manifold`,
 //! `vertex_manifold`, `watertight`, `boundary_edges`, `boundary_loops`, `components`,
-//! `degenerate_faces`, `duplicate_faces`, `non_manifold_edges`, `load_seconds`.
+//! `degenerate_faces`, `duplicate_faces`, `non_manifold_edges`, `misoriented_edges`,
+//! `load_seconds`.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -98,6 +99,7 @@ fn to_json(file: &Path, r: &MeshReport, load_seconds: f64) -> Value {
         "degenerate_faces": r.degenerate_faces,
         "duplicate_faces": r.duplicate_faces,
         "non_manifold_edges": r.non_manifold_edges,
+        "misoriented_edges": r.misoriented_edges,
         "load_seconds": load_seconds,
     })
 }
@@ -120,6 +122,7 @@ fn print_text(report: &Value) {
         "degenerate_faces",
         "duplicate_faces",
         "non_manifold_edges",
+        "misoriented_edges",
     ] {
         stdout_line!("  {key:<19}{}", field(key));
     }

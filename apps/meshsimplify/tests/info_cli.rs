@@ -38,6 +38,7 @@ fn json_report_has_the_documented_keys_and_values() {
     assert_eq!(report["boundary_loops"], 0);
     assert_eq!(report["components"], 1);
     assert_eq!(report["degenerate_faces"], 0);
+    assert_eq!(report["misoriented_edges"], 0);
     assert_eq!(report["bbox_min"], serde_json::json!([-1.0, -1.0, -1.0]));
     assert_eq!(report["bbox_max"], serde_json::json!([1.0, 1.0, 1.0]));
     assert!(report["load_seconds"].as_f64().unwrap() >= 0.0);

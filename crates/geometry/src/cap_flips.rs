@@ -38,7 +38,7 @@ pub const CAP_RELATIVE_HEIGHT: f64 = 1e-6;
 const MAX_PASSES: usize = 8;
 
 /// Faces per undirected edge, each with the direction it runs the edge in.
-type EdgeFaces = HashMap<(u32, u32), Vec<(usize, bool)>>;
+pub(crate) type EdgeFaces = HashMap<(u32, u32), Vec<(usize, bool)>>;
 
 /// `mesh` with its caps flipped away (module docs); vertices unchanged, faces in the same
 /// order with each flipped pair rewritten in place.
@@ -72,17 +72,6 @@ pub fn flip_caps(mesh: &TriMesh) -> Result<TriMesh> {
         }
     }
     TriMesh::new(vertices.to_vec(), faces)
-}
-
-/// True when `t`'s height over its longest edge is within the flat tolerance (module docs):
-/// its normal is rounding noise (a cap, or two corners in one place).
-pub(crate) fn is_flat(vertices: &[[f32; 3]], t: &[u32; 3]) -> bool {
-    let corners = t.map(|v| to_f64(vertices[v as usize]));
-    let longest = (0..3)
-        .map(|k| norm(sub(corners[(k + 1) % 3], corners[k])))
-        .fold(0.0, f64::max);
-    let [a, b, c] = corners;
-    norm(cross(sub(b, a), sub(c, a))) <= flat_height(longest, &corners) * longest
 }
 
 /// The height over a segment of length `length` below which a point counts as on it:
@@ -161,7 +150,7 @@ pub(crate) fn edge_key(u: u32, v: u32) -> (u32, u32) {
     (u.min(v), u.max(v))
 }
 
-fn add_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
+pub(crate) fn add_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
     for i in 0..3 {
         let (u, v) = (t[i], t[(i + 1) % 3]);
         edge_faces
@@ -171,7 +160,7 @@ fn add_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
     }
 }
 
-fn remove_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
+pub(crate) fn remove_face(edge_faces: &mut EdgeFaces, f: usize, t: &[u32; 3]) {
     for i in 0..3 {
         let k = edge_key(t[i], t[(i + 1) % 3]);
         if let Some(list) = edge_faces.get_mut(&k) {

@@ -41,6 +41,7 @@ mod degenerate_faces;
 mod duplicate_faces;
 mod edge_topology;
 mod face_normals;
+mod fold_flips;
 mod graph_laplacian;
 mod hole_filling;
 mod input_content;
@@ -98,6 +99,7 @@ pub use degenerate_faces::degenerate_faces;
 pub use duplicate_faces::duplicate_faces;
 pub use edge_topology::{EdgeIncidence, EdgeTopology, edge_topology};
 pub use face_normals::{face_areas, face_normals};
+pub use fold_flips::flip_folds;
 pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,

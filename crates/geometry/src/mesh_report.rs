@@ -39,6 +39,9 @@ pub struct MeshReport {
     pub duplicate_faces: usize,
     /// Edges with three or more faces.
     pub non_manifold_edges: usize,
+    /// Edges whose two faces run them the same way: an edge-manifold mesh without any is
+    /// consistently oriented.
+    pub misoriented_edges: usize,
     /// WA (section 6.5.1): percentage of edges whose valence is not 2.
     pub non_manifold_edge_percentage: f64,
     /// Component-wise minimum of the vertex positions (zeros for an empty mesh).
@@ -72,6 +75,9 @@ pub fn mesh_report(mesh: &TriMesh) -> MeshReport {
         degenerate_faces: degenerate_faces(mesh),
         duplicate_faces: duplicate_faces(mesh),
         non_manifold_edges: topology.valences().filter(|&n| n > 2).count(),
+        misoriented_edges: (0..topology.edge_count())
+            .filter(|&e| matches!(topology.incidences(e), [x, y] if x.from == y.from))
+            .count(),
         non_manifold_edge_percentage: non_watertight_percentage_in(&topology),
         bbox_min,
         bbox_max,
@@ -91,6 +97,7 @@ mod tests {
         assert_eq!(report.boundary_loops, 0);
         assert_eq!(report.boundary_edges, 0);
         assert_eq!(report.non_manifold_edge_percentage, 0.0);
+        assert_eq!(report.misoriented_edges, 0);
         assert_eq!((report.bbox_min, report.bbox_max), ([-1.0; 3], [1.0; 3]));
         assert_eq!(report.vertices + report.faces, report.edges + 2);
     }
@@ -112,5 +119,16 @@ mod tests {
         assert_eq!(report.duplicate_faces, 1);
         assert_eq!(report.degenerate_faces, 1);
         assert_eq!(report.components, 1);
+    }
+
+    #[test]
+    fn faces_running_an_edge_the_same_way_are_counted() {
+        let v = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]];
+        let consistent = TriMesh::new(v.clone(), vec![[0, 1, 2], [1, 0, 3]]).unwrap();
+        assert_eq!(mesh_report(&consistent).misoriented_edges, 0);
+        let flipped = TriMesh::new(v, vec![[0, 1, 2], [0, 1, 3]]).unwrap();
+        let report = mesh_report(&flipped);
+        assert_eq!(report.misoriented_edges, 1);
+        assert!(report.edge_manifold);
     }
 }

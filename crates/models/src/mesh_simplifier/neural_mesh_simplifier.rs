@@ -11,8 +11,9 @@
 //! them (`A_s`) and proposes candidate triangles, the face classifier scores each.
 //! [`NeuralMeshSimplifier::forward`] returns everything the eq. 6.14 loss needs;
 //! [`NeuralMeshSimplifier::simplify`] keeps the faces with `p_t > 0.5` (ch. 6.4), makes them
-//! edge-manifold, each facing along the input's normals
-//! ([`meshgnn_geometry::select_manifold_faces`]), drops the lone faces and pairs laid over
+//! edge-manifold and consistently oriented, each part facing along the input's normals
+//! ([`meshgnn_geometry::select_manifold_faces`]), flips its folded faces away
+//! ([`meshgnn_geometry::flip_folds`]), drops the lone faces and pairs laid over
 //! that surface ([`remove_overlays`]), gives each closed part of the input it kept only a seed
 //! floor's worth of vertices and left open the hull of those vertices
 //! ([`hull_small_open_parts`], beyond the thesis), fills the cracks of at most
@@ -52,7 +53,7 @@ use candle_nn::VarBuilder;
 use meshgnn_geometry::{
     MIN_COMPONENT_SEEDS, OpenPart, PartSurface, TriMesh, boundary_loops, close_cracks,
     close_lone_faces, component_seed_floor, connected_components, fill_holes, fill_holes_where,
-    flip_caps, hull_small_open_parts, nearest_seed_dual_triangles, on_border,
+    flip_caps, flip_folds, hull_small_open_parts, nearest_seed_dual_triangles, on_border,
     rebuild_small_open_parts, remove_flaps, remove_overlays, select_manifold_faces,
     unit_sphere_normalization, vertex_normals, voronoi_dual_edges,
 };
@@ -429,7 +430,8 @@ impl NeuralMeshSimplifier {
     /// Simplifies `mesh` to about `target` vertices (`3 ≤ target ≤` its distinct positions):
     /// vertices at one position welded first ([`weld_coincident_vertices`]: a model made of
     /// patches is simplified as one surface), faces with `p_t > 0.5`,
-    /// then the manifold pass (module docs) and its overlays removed, each closed part of at
+    /// then the manifold pass (module docs), its folded faces flipped away
+    /// ([`meshgnn_geometry::flip_folds`]) and its overlays removed, each closed part of at
     /// most [`MIN_COMPONENT_SEEDS`] kept vertices its faces leave open replaced by their hull
     /// ([`hull_small_open_parts`]), unless `options.fill_holes_up_to` is set the cracks inside
     /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`]), each closed part of at most
@@ -525,7 +527,7 @@ impl NeuralMeshSimplifier {
             FACE_THRESHOLD,
             Some(&normals),
         )?;
-        let selected = remove_overlays(&TriMesh::new(vertices, faces)?);
+        let selected = remove_overlays(&flip_folds(&TriMesh::new(vertices, faces)?, &normals)?);
         let selected = hull_small_open_parts(mesh, &vertex_map, &selected, MIN_COMPONENT_SEEDS)?;
         let selected = match options.fill_holes_up_to {
             None => fill_cracks_inside(mesh, &vertex_map, &selected)?,
