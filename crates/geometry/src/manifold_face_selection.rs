@@ -15,11 +15,11 @@
 //!    the area normal dotted with the sum of the corners' normals is negative), or, without
 //!    them, when its flux around its centroid is negative (a closed component then faces
 //!    outwards). A face folded back over its neighbours stays consistent with them, so it
-//!    faces against its own corners' normals: the fold is in the geometry, and turning the
-//!    face would only move it into the orientation. Until 6 December each face was instead
-//!    turned along its corners' normals: on thin parts, whose two sides' normals meet in one
-//!    face, that left 13-19 edges run twice the same way at 10 % on the airplane, the ant
-//!    and the teapot (docs/mesh_simplifier_model.md, "One orientation per part").
+//!    faces against its own corners' normals: the fold is in the connectivity, and
+//!    [`crate::flip_folds`] mends it there. Turning each face along its corners' normals
+//!    instead, as this pass did before, runs an edge twice the same way at every fold and
+//!    across thin parts, whose two sides' normals meet in one face
+//!    (docs/mesh_simplifier_model.md, "One orientation per part").
 
 use std::collections::HashMap;
 use std::collections::VecDeque;
