@@ -125,15 +125,7 @@ fn flip_fold(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{boundary_loops, is_edge_manifold};
-
-    /// Every directed edge at most once.
-    fn consistently_oriented(faces: &[[u32; 3]]) -> bool {
-        let mut seen = std::collections::HashSet::new();
-        faces
-            .iter()
-            .all(|t| (0..3).all(|k| seen.insert((t[k], t[(k + 1) % 3]))))
-    }
+    use crate::{boundary_loops, is_edge_manifold, mesh_report};
 
     /// A 3 × 3 grid of unit cells in z = 0 (vertices `4 j + i`), each cell split along its
     /// diagonal from the lower left corner, with vertex 5 moved across the diagonal 1-6 of
@@ -165,11 +157,11 @@ mod tests {
                 .map(|&t| facing_reference(m.vertices(), &up, t))
                 .collect()
         };
-        assert!(consistently_oriented(mesh.triangles()));
+        assert_eq!(mesh_report(&mesh).misoriented_edges, 0);
         assert_eq!(facing(&mesh).iter().filter(|&&c| c < 0.0).count(), 1);
         let flipped = flip_folds(&mesh, &up).unwrap();
         assert!(facing(&flipped).iter().all(|&c| c > 0.0), "{flipped:?}");
-        assert!(consistently_oriented(flipped.triangles()));
+        assert_eq!(mesh_report(&flipped).misoriented_edges, 0);
         assert!(is_edge_manifold(&flipped));
         assert_eq!(flipped.face_count(), mesh.face_count());
         assert_eq!(boundary_loops(&flipped), boundary_loops(&mesh));
