@@ -56,6 +56,22 @@ pub fn is_vertex_manifold(mesh: &TriMesh) -> bool {
     non_manifold_vertices(mesh).is_empty()
 }
 
+/// True when some vertex of `faces` has more than one fan (see [`non_manifold_vertices`]):
+/// the same test on a few faces of a larger mesh, without a vertex table of its size.
+pub(crate) fn has_pinched_vertex(faces: &[[u32; 3]]) -> bool {
+    let mut corners: Vec<(u32, u32)> = faces
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .flat_map(|(f, t)| t.map(|v| (v, f as u32)))
+        .collect();
+    corners.sort_unstable();
+    corners.chunk_by(|a, b| a.0 == b.0).any(|around| {
+        let fan: Vec<u32> = around.iter().map(|&(_, f)| f).collect();
+        fan_count(around[0].0, &fan, faces) > 1
+    })
+}
+
 /// Vertex → incident faces in CSR layout (`offsets: #V+1`, faces ascending), skipping faces
 /// with a repeated vertex index. Built by a counting sort, O(V + F).
 pub(crate) fn vertex_corners(mesh: &TriMesh) -> (Vec<usize>, Vec<u32>) {
@@ -90,6 +106,24 @@ fn fan_count(vertex: u32, faces: &[u32], triangles: &[[u32; 3]]) -> usize {
     if faces.len() <= 1 {
         return faces.len();
     }
+    fan_forest(vertex, faces, triangles).1
+}
+
+/// The fan of each of `faces` around `vertex` (a label per face, equal within a fan) and the
+/// number of fans (see [`fan_count`]).
+pub(crate) fn fans_around(
+    vertex: u32,
+    faces: &[u32],
+    triangles: &[[u32; 3]],
+) -> (Vec<usize>, usize) {
+    let (mut parent, fans) = fan_forest(vertex, faces, triangles);
+    let labels = (0..faces.len()).map(|i| root(&mut parent, i)).collect();
+    (labels, fans)
+}
+
+/// A union-find forest over `faces` (local indices) joining faces that share an edge
+/// `(vertex, w)`, and its number of trees.
+fn fan_forest(vertex: u32, faces: &[u32], triangles: &[[u32; 3]]) -> (Vec<usize>, usize) {
     // (opposite vertex w, local face index) for both edges of each face at `vertex`.
     let mut spokes: Vec<(u32, usize)> = Vec::with_capacity(2 * faces.len());
     for (local, &f) in faces.iter().enumerate() {
@@ -101,13 +135,6 @@ fn fan_count(vertex: u32, faces: &[u32], triangles: &[[u32; 3]]) -> usize {
     }
     spokes.sort_unstable();
     let mut parent: Vec<usize> = (0..faces.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
     let mut fans = faces.len();
     for pair in spokes.windows(2) {
         if pair[0].0 == pair[1].0 {
@@ -118,13 +145,40 @@ fn fan_count(vertex: u32, faces: &[u32], triangles: &[[u32; 3]]) -> usize {
             }
         }
     }
-    fans
+    (parent, fans)
+}
+
+fn root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{grid_plane, icosphere, subdivided_cube};
+
+    #[test]
+    fn pinches_among_a_few_faces_are_found_as_in_a_whole_mesh() {
+        let sphere = icosphere(1);
+        assert!(!has_pinched_vertex(sphere.triangles()));
+        // Two faces of the sphere that share only a vertex: a bowtie.
+        let faces = sphere.triangles();
+        let (a, b) = faces
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| faces[i + 1..].iter().map(move |t| (s, t)))
+            .find(|(s, t)| s.iter().filter(|v| t.contains(v)).count() == 1)
+            .unwrap();
+        assert!(has_pinched_vertex(&[*a, *b]));
+        // The same two faces with a degenerate face between them: still a bowtie.
+        let shared = *a.iter().find(|v| b.contains(v)).unwrap();
+        assert!(has_pinched_vertex(&[*a, [shared, shared, a[0]], *b]));
+        assert!(!has_pinched_vertex(&[]));
+    }
 
     #[test]
     fn analytic_shapes_are_manifold() {

@@ -9,6 +9,7 @@
 use crate::connected_components::{UNREFERENCED, connected_components};
 use crate::convex_hull::convex_hull;
 use crate::error::{Error, Result};
+use crate::manifold::has_pinched_vertex;
 use crate::tri_mesh::TriMesh;
 use crate::vec3::{norm, triangle_cross};
 
@@ -36,10 +37,10 @@ pub struct OpenPart<'a> {
 /// (added by hole filling) belong to no part. A part is a connected component of `input`
 /// whose every edge has two faces (closed) and which holds from 4 to `max_kept` output
 /// vertices; it is replaced when the output faces with a corner on it are not a closed surface
-/// over its vertices and vertices of no part (none, a border, an edge of three faces, or a
-/// face reaching another part). Its replacement: every such face dropped, the [`convex_hull`]
-/// of its output vertices added after the other faces (parts in the order of their smallest
-/// input vertex).
+/// over its vertices and vertices of no part (none, a border, an edge of three faces, a face
+/// reaching another part, or a vertex where two closed pieces of it touch). Its replacement:
+/// every such face dropped, the [`convex_hull`] of its output vertices added after the other
+/// faces (parts in the order of their smallest input vertex).
 /// A part whose vertices lie in one plane, or whose hull has more than
 /// [`MAX_HULL_AREA_RATIO`] times its area, keeps its faces. The output stays edge-manifold
 /// where it was: a hull's vertices carry only its own faces. Vertices are unchanged.
@@ -164,7 +165,12 @@ pub fn rebuild_small_open_parts(
         }
     }
     let rebuilt: Vec<(usize, PartSurface)> = (0..count)
-        .filter(|&c| small(c) && (reaches_out[c] || !is_closed_surface(&touching[c])))
+        .filter(|&c| {
+            small(c)
+                && (reaches_out[c]
+                    || !is_closed_surface(&touching[c])
+                    || has_pinched_vertex(&touching[c]))
+        })
         .filter_map(|c| {
             let part = OpenPart {
                 members: &members[c],
@@ -230,7 +236,7 @@ fn is_closed_surface(faces: &[[u32; 3]]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{icosphere, is_edge_manifold, is_watertight, torus};
+    use crate::{icosphere, is_edge_manifold, is_vertex_manifold, is_watertight, torus};
 
     /// Two unit icospheres, the second shifted by 3 along x.
     fn two_spheres() -> TriMesh {
@@ -336,6 +342,31 @@ mod tests {
         let output = TriMesh::new(kept_positions(&input, &kept), faces.clone()).unwrap();
         let same = hull_small_open_parts(&input, &kept, &output, 5).unwrap();
         assert_eq!(same.triangles(), &faces[..]);
+    }
+
+    #[test]
+    fn a_part_whose_closed_pieces_touch_at_a_vertex_becomes_its_hull() {
+        let input = two_spheres();
+        // Seven kept vertices of the first sphere: two closed tetrahedra sharing vertex 3.
+        // Every edge has two faces, but vertex 3 carries two fans.
+        let kept: Vec<u32> = (0..7).collect();
+        let pinched = vec![
+            [0, 1, 2],
+            [0, 3, 1],
+            [1, 3, 2],
+            [2, 3, 0],
+            [3, 4, 5],
+            [3, 6, 4],
+            [4, 6, 5],
+            [5, 6, 3],
+        ];
+        let output = TriMesh::new(kept_positions(&input, &kept), pinched).unwrap();
+        assert!(is_watertight(&output) && !is_vertex_manifold(&output));
+        let hulled = hull_small_open_parts(&input, &kept, &output, 7).unwrap();
+        assert!(is_watertight(&hulled) && is_vertex_manifold(&hulled));
+        let used: std::collections::BTreeSet<u32> =
+            hulled.triangles().iter().flatten().copied().collect();
+        assert_eq!(used.len(), 7, "every kept vertex on the hull");
     }
 
     #[test]
