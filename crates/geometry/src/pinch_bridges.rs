@@ -8,8 +8,10 @@
 //! Two closed fans of different pieces at `u` are joined by a bridge: one face of each,
 //! `(u, a, b)` and `(u, c, d)`, is removed, and the gap closed by `(u, a, d)`, `(u, c, b)` and
 //! the quadrilateral `a b c d` in two faces. That is a connected sum: the pieces become one
-//! surface of the same genus and orientation, with `u` on a single fan. Of the face pairs and
-//! diagonals that add no edge the mesh already has, the one of least new area is made.
+//! surface of the same genus and orientation, with `u` on a single fan. Of the face pairs
+//! ([`BRIDGE_CANDIDATES`] faces of each fan, those nearest the other) and diagonals that add
+//! no edge the mesh already has, the one of least new area is made. The largest closed fan
+//! at `u` is bridged to each other closed fan of another piece in turn.
 //!
 //! Fans left in one piece (the second contact of two bridged pieces, two fans of one open
 //! sheet) are split instead: every fan but the largest gets a copy of the vertex, which cuts
@@ -23,7 +25,12 @@ use crate::cap_flips::{EdgeFaces, add_face, edge_key, remove_face};
 use crate::error::Result;
 use crate::manifold::{fans_around, non_manifold_vertices};
 use crate::tri_mesh::TriMesh;
-use crate::vec3::{norm, triangle_cross};
+use crate::vec3::{norm, sub, to_f64, triangle_cross};
+
+/// Faces of each fan a bridge may go through: those nearest the other fan. It bounds the
+/// search on a vertex of large fans; the fans of the neural simplifier's pinches hold at most
+/// a dozen faces, and their least-area bridge goes through faces that face each other.
+pub const BRIDGE_CANDIDATES: usize = 8;
 
 /// `mesh` with its pinched vertices bridged or split (module docs): the faces of `mesh` in
 /// their order less the bridged ones, then the bridges' faces; the vertices of `mesh`, then
@@ -52,7 +59,7 @@ pub fn bridge_pinched_vertices(mesh: &TriMesh) -> Result<TriMesh> {
     }
     let mut surgery = Surgery::new(mesh, &pinched);
     for &u in &pinched {
-        while surgery.bridge_at(u) {}
+        surgery.bridge_fans(u);
         surgery.split_within_pieces(u);
     }
     surgery.into_mesh()
@@ -140,45 +147,85 @@ impl Surgery {
         })
     }
 
-    /// Makes the least-area bridge between two closed fans of different pieces at `u`;
-    /// false when there is none.
-    fn bridge_at(&mut self, u: u32) -> bool {
-        let fans: Vec<Vec<u32>> = self
+    /// Bridges the largest closed fan at `u` to each other closed fan of another piece in
+    /// turn (module docs), the fan growing with each bridge.
+    fn bridge_fans(&mut self, u: u32) {
+        let mut fans: Vec<Vec<u32>> = self
             .fans(u)
             .into_iter()
             .filter(|fan| self.is_closed(u, fan))
             .collect();
+        if fans.len() < 2 {
+            return;
+        }
+        fans.sort_by_key(|fan| std::cmp::Reverse(fan.len()));
+        let mut hub = fans[0].clone();
+        for other in &fans[1..] {
+            if self.piece(hub[0]) == self.piece(other[0]) {
+                continue;
+            }
+            let Some(bridge) = self.least_area_bridge(u, &hub, other) else {
+                continue;
+            };
+            let [f, g] = bridge.removed;
+            self.pieces.union(self.anchor[f], self.anchor[g]);
+            for r in bridge.removed {
+                self.remove(r);
+            }
+            for t in bridge.added {
+                self.add(t, f);
+            }
+            // The first added face, `(u, a, d)`, lies in the joined fan.
+            let joined = (self.faces.len() - 4) as u32;
+            match self.fans(u).into_iter().find(|fan| fan.contains(&joined)) {
+                Some(fan) => hub = fan,
+                None => return,
+            }
+        }
+    }
+
+    /// The least-area bridge between fans `first` and `second` at `u`, through one of the
+    /// [`BRIDGE_CANDIDATES`] faces of each nearest the other fan.
+    fn least_area_bridge(&self, u: u32, first: &[u32], second: &[u32]) -> Option<Bridge> {
         let mut best: Option<Bridge> = None;
-        for (i, first) in fans.iter().enumerate() {
-            for second in &fans[i + 1..] {
-                if self.piece(first[0]) == self.piece(second[0]) {
-                    continue;
-                }
-                for &f in first {
-                    for &g in second {
-                        for diagonal in [false, true] {
-                            if let Some(bridge) = self.bridge(u, f, g, diagonal)
-                                && best.as_ref().is_none_or(|b| bridge.area < b.area)
-                            {
-                                best = Some(bridge);
-                            }
-                        }
+        for f in self.nearest_faces(first, second) {
+            for g in self.nearest_faces(second, first) {
+                for diagonal in [false, true] {
+                    if let Some(bridge) = self.bridge(u, f, g, diagonal)
+                        && best.as_ref().is_none_or(|b| bridge.area < b.area)
+                    {
+                        best = Some(bridge);
                     }
                 }
             }
         }
-        let Some(bridge) = best else {
-            return false;
+        best
+    }
+
+    /// The [`BRIDGE_CANDIDATES`] faces of `fan` whose centroids lie nearest the mean centroid
+    /// of `other`'s, nearest first (ties in fan order).
+    fn nearest_faces(&self, fan: &[u32], other: &[u32]) -> Vec<u32> {
+        let centroid = |f: u32| -> [f64; 3] {
+            let corners = self.faces[f as usize].map(|v| to_f64(self.vertices[v as usize]));
+            std::array::from_fn(|k| corners.iter().map(|p| p[k]).sum::<f64>() / 3.0)
         };
-        let [f, g] = bridge.removed;
-        self.pieces.union(self.anchor[f], self.anchor[g]);
-        for r in bridge.removed {
-            self.remove(r);
+        let mut centre = [0.0; 3];
+        for &g in other {
+            let c = centroid(g);
+            for k in 0..3 {
+                centre[k] += c[k] / other.len() as f64;
+            }
         }
-        for t in bridge.added {
-            self.add(t, f);
-        }
-        true
+        let mut by_distance: Vec<(f64, u32)> = fan
+            .iter()
+            .map(|&f| (norm(sub(centroid(f), centre)), f))
+            .collect();
+        by_distance.sort_by(|a, b| a.0.total_cmp(&b.0));
+        by_distance
+            .into_iter()
+            .take(BRIDGE_CANDIDATES)
+            .map(|(_, f)| f)
+            .collect()
     }
 
     /// The bridge through faces `f` and `g` at `u`, its quadrilateral split along `bd` when
@@ -415,6 +462,32 @@ mod tests {
             let edges = 3 * mended.face_count() / 2;
             proptest::prop_assert_eq!(mended.vertex_count() + mended.face_count() - edges, 2);
         }
+    }
+
+    #[test]
+    fn hundreds_of_pieces_at_one_vertex_become_one_surface() {
+        // 300 tetrahedra sharing their apex, their bases on a ring around it.
+        let mut vertices = vec![[0.0f32, 0.0, 0.0]];
+        let mut faces = Vec::new();
+        for k in 0..300 {
+            let angle = k as f32 * std::f32::consts::TAU / 300.0;
+            let (c, s) = (angle.cos(), angle.sin());
+            let base = vertices.len() as u32;
+            vertices.extend([
+                [2.0 * c, 2.0 * s, 0.1],
+                [2.0 * c, 2.0 * s, -0.1],
+                [2.2 * c - 0.01 * s, 2.2 * s + 0.01 * c, 0.0],
+            ]);
+            let [a, b, d] = [base, base + 1, base + 2];
+            faces.extend([[0, a, b], [0, b, d], [0, d, a], [a, d, b]]);
+        }
+        let mesh = TriMesh::new(vertices, faces).unwrap();
+        assert_eq!(non_manifold_vertices(&mesh), vec![0]);
+        let bridged = bridge_pinched_vertices(&mesh).unwrap();
+        assert!(is_vertex_manifold(&bridged) && is_edge_manifold(&bridged));
+        assert!(is_watertight(&bridged));
+        assert_eq!(connected_components(&bridged).0, 1);
+        assert_eq!(bridged.face_count(), mesh.face_count() + 2 * 299);
     }
 
     #[test]
