@@ -120,7 +120,7 @@ pub use non_manifold_edges::{non_manifold_edges, non_watertight_edge_percentage}
 pub use normalization::{Normalization, unit_sphere_normalization};
 pub use overlays::{MAX_OVERLAY_FACES, remove_flaps, remove_overlays};
 pub use pca_normals::{PcaFeatures, pca_normals_and_curvature};
-pub use pinch_bridges::{BRIDGE_CANDIDATES, bridge_pinched_vertices};
+pub use pinch_bridges::{BRIDGE_CANDIDATES, MAX_BRIDGES_PER_VERTEX, bridge_pinched_vertices};
 pub use small_part_hulls::{
     MAX_HULL_AREA_RATIO, OpenPart, PartSurface, hull_small_open_parts, part_hull,
     rebuild_small_open_parts,

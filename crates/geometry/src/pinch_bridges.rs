@@ -11,13 +11,14 @@
 //! surface of the same genus and orientation, with `u` on a single fan. Of the face pairs
 //! ([`BRIDGE_CANDIDATES`] faces of each fan, those nearest the other) and diagonals that add
 //! no edge the mesh already has, the one of least new area is made. The largest closed fan
-//! at `u` is bridged to each other closed fan of another piece in turn.
+//! at `u` is bridged to each other closed fan of another piece in turn, to at most
+//! [`MAX_BRIDGES_PER_VERTEX`].
 //!
 //! Fans left in one piece (the second contact of two bridged pieces, two fans of one open
 //! sheet) are split instead: every fan but the largest gets a copy of the vertex, which cuts
 //! nothing apart. Fans of different pieces that cannot be bridged (open ones) stay.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use petgraph::unionfind::UnionFind;
 
@@ -31,6 +32,11 @@ use crate::vec3::{norm, sub, to_f64, triangle_cross};
 /// search on a vertex of large fans; the fans of the neural simplifier's pinches hold at most
 /// a dozen faces, and their least-area bridge goes through faces that face each other.
 pub const BRIDGE_CANDIDATES: usize = 8;
+
+/// Other fans a vertex's largest closed fan is bridged to at most (the largest first); the
+/// rest stay, or are split when in its piece. It bounds the work on a vertex of thousands of
+/// fans, a file made to be slow.
+pub const MAX_BRIDGES_PER_VERTEX: usize = 64;
 
 /// `mesh` with its pinched vertices bridged or split (module docs): the faces of `mesh` in
 /// their order less the bridged ones, then the bridges' faces; the vertices of `mesh`, then
@@ -119,18 +125,19 @@ impl Surgery {
         self.pieces.find(self.anchor[f as usize])
     }
 
-    /// The fans around `u`, each a list of faces.
+    /// The fans around `u`, each a list of faces, ascending, in the order of their first.
     fn fans(&self, u: u32) -> Vec<Vec<u32>> {
         let faces = self.around.get(&u).map_or(&[][..], Vec::as_slice);
         let (labels, _) = fans_around(u, faces, &self.faces);
-        let mut fans: Vec<(usize, Vec<u32>)> = Vec::new();
-        for (&f, &label) in faces.iter().zip(&labels) {
-            match fans.iter_mut().find(|(l, _)| *l == label) {
-                Some((_, fan)) => fan.push(f),
-                None => fans.push((label, vec![f])),
-            }
-        }
-        fans.into_iter().map(|(_, fan)| fan).collect()
+        let mut labelled: Vec<(usize, u32)> =
+            labels.into_iter().zip(faces.iter().copied()).collect();
+        labelled.sort_unstable();
+        let mut fans: Vec<Vec<u32>> = labelled
+            .chunk_by(|a, b| a.0 == b.0)
+            .map(|fan| fan.iter().map(|&(_, f)| f).collect())
+            .collect();
+        fans.sort_unstable_by_key(|fan| fan[0]);
+        fans
     }
 
     /// True when every edge of the fan at `u` has two faces.
@@ -160,7 +167,7 @@ impl Surgery {
         }
         fans.sort_by_key(|fan| std::cmp::Reverse(fan.len()));
         let mut hub = fans[0].clone();
-        for other in &fans[1..] {
+        for other in fans.iter().skip(1).take(MAX_BRIDGES_PER_VERTEX) {
             if self.piece(hub[0]) == self.piece(other[0]) {
                 continue;
             }
@@ -263,11 +270,10 @@ impl Surgery {
         let mut fans = self.fans(u);
         // Largest first, so that it keeps `u`; ties in face order.
         fans.sort_by_key(|fan| std::cmp::Reverse(fan.len()));
-        let mut pieces_seen: Vec<usize> = Vec::new();
+        let mut pieces_seen: HashSet<usize> = HashSet::new();
+        let mut moved_away: HashSet<u32> = HashSet::new();
         for fan in fans {
-            let piece = self.piece(fan[0]);
-            if !pieces_seen.contains(&piece) {
-                pieces_seen.push(piece);
+            if pieces_seen.insert(self.piece(fan[0])) {
                 continue;
             }
             let copy = self.vertices.len() as u32;
@@ -278,10 +284,11 @@ impl Surgery {
                 let moved = t.map(|v| if v == u { copy } else { v });
                 self.faces[f as usize] = moved;
                 add_face(&mut self.edge_faces, f as usize, &moved);
-                if let Some(list) = self.around.get_mut(&u) {
-                    list.retain(|&h| h != f);
-                }
+                moved_away.insert(f);
             }
+        }
+        if let Some(list) = self.around.get_mut(&u) {
+            list.retain(|f| !moved_away.contains(f));
         }
     }
 
@@ -465,12 +472,12 @@ mod tests {
     }
 
     #[test]
-    fn hundreds_of_pieces_at_one_vertex_become_one_surface() {
-        // 300 tetrahedra sharing their apex, their bases on a ring around it.
+    fn dozens_of_pieces_at_one_vertex_become_one_surface() {
+        // 60 tetrahedra sharing their apex, their bases on a ring around it.
         let mut vertices = vec![[0.0f32, 0.0, 0.0]];
         let mut faces = Vec::new();
-        for k in 0..300 {
-            let angle = k as f32 * std::f32::consts::TAU / 300.0;
+        for k in 0..60 {
+            let angle = k as f32 * std::f32::consts::TAU / 60.0;
             let (c, s) = (angle.cos(), angle.sin());
             let base = vertices.len() as u32;
             vertices.extend([
@@ -487,7 +494,35 @@ mod tests {
         assert!(is_vertex_manifold(&bridged) && is_edge_manifold(&bridged));
         assert!(is_watertight(&bridged));
         assert_eq!(connected_components(&bridged).0, 1);
-        assert_eq!(bridged.face_count(), mesh.face_count() + 2 * 299);
+        assert_eq!(bridged.face_count(), mesh.face_count() + 2 * 59);
+    }
+
+    #[test]
+    fn thousands_of_pieces_at_one_vertex_end_quickly() {
+        // 5 000 tetrahedra sharing their apex: the largest fan is bridged to 64 others.
+        let mut vertices = vec![[0.0f32, 0.0, 0.0]];
+        let mut faces = Vec::new();
+        for k in 0..5000u32 {
+            let angle = k as f32 * 0.001_256_6;
+            let (c, s) = (angle.cos(), angle.sin());
+            let base = vertices.len() as u32;
+            vertices.extend([
+                [2.0 * c, 2.0 * s, 0.1],
+                [2.0 * c, 2.0 * s, -0.1],
+                [2.2 * c, 2.2 * s, 0.0],
+            ]);
+            let [a, b, d] = [base, base + 1, base + 2];
+            faces.extend([[0, a, b], [0, b, d], [0, d, a], [a, d, b]]);
+        }
+        let mesh = TriMesh::new(vertices, faces).unwrap();
+        let started = std::time::Instant::now();
+        let bridged = bridge_pinched_vertices(&mesh).unwrap();
+        assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
+        assert_eq!(
+            bridged.face_count(),
+            mesh.face_count() + 2 * MAX_BRIDGES_PER_VERTEX
+        );
+        assert!(is_edge_manifold(&bridged) && is_watertight(&bridged));
     }
 
     #[test]
