@@ -14,9 +14,10 @@
 //! at `u` is bridged to each other closed fan of another piece in turn, to at most
 //! [`MAX_BRIDGES_PER_VERTEX`].
 //!
-//! Fans left in one piece (the second contact of two bridged pieces, two fans of one open
-//! sheet) are split instead: every fan but the largest gets a copy of the vertex, which cuts
-//! nothing apart. Fans of different pieces that cannot be bridged (open ones) stay.
+//! The other fans are split: each gets a copy of the vertex. Within one piece (the second
+//! contact of two bridged pieces, two fans of one open sheet) that cuts nothing apart; an open
+//! fan at another piece's vertex (a lone face, a rim) is cut off rather than left pinched.
+//! Only closed fans of different pieces that no bridge fits stay.
 
 use std::collections::{HashMap, HashSet};
 
@@ -66,7 +67,7 @@ pub fn bridge_pinched_vertices(mesh: &TriMesh) -> Result<TriMesh> {
     let mut surgery = Surgery::new(mesh, &pinched);
     for &u in &pinched {
         surgery.bridge_fans(u);
-        surgery.split_within_pieces(u);
+        surgery.split_fans(u);
     }
     surgery.into_mesh()
 }
@@ -265,15 +266,20 @@ impl Surgery {
         })
     }
 
-    /// Gives every fan of `u` but the largest of its piece a copy of `u`.
-    fn split_within_pieces(&mut self, u: u32) {
-        let mut fans = self.fans(u);
-        // Largest first, so that it keeps `u`; ties in face order.
-        fans.sort_by_key(|fan| std::cmp::Reverse(fan.len()));
+    /// Gives a copy of `u` to every fan but the first (closed fans first, then the larger),
+    /// except a closed fan of a piece no earlier fan is in: one the bridges could not join.
+    fn split_fans(&mut self, u: u32) {
+        let mut fans: Vec<(bool, Vec<u32>)> = self
+            .fans(u)
+            .into_iter()
+            .map(|fan| (self.is_closed(u, &fan), fan))
+            .collect();
+        fans.sort_by_key(|(closed, fan)| (!closed, std::cmp::Reverse(fan.len())));
         let mut pieces_seen: HashSet<usize> = HashSet::new();
         let mut moved_away: HashSet<u32> = HashSet::new();
-        for fan in fans {
-            if pieces_seen.insert(self.piece(fan[0])) {
+        for (k, (closed, fan)) in fans.into_iter().enumerate() {
+            let new_piece = pieces_seen.insert(self.piece(fan[0]));
+            if k == 0 || (closed && new_piece) {
                 continue;
             }
             let copy = self.vertices.len() as u32;
@@ -417,8 +423,8 @@ mod tests {
     }
 
     #[test]
-    fn open_fans_of_separate_pieces_and_manifold_meshes_stay() {
-        // A bowtie: two lone faces sharing vertex 0.
+    fn open_fans_at_a_pinch_are_cut_off_and_manifold_meshes_stay() {
+        // A bowtie: two lone faces sharing vertex 0. The second gets a copy of it.
         let v = vec![
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
@@ -426,8 +432,19 @@ mod tests {
             [-1.0, 0.0, 0.0],
             [-1.0, -1.0, 0.0],
         ];
-        let bowtie = TriMesh::new(v, vec![[0, 1, 2], [0, 3, 4]]).unwrap();
-        assert_eq!(bridge_pinched_vertices(&bowtie).unwrap(), bowtie);
+        let bowtie = TriMesh::new(v.clone(), vec![[0, 1, 2], [0, 3, 4]]).unwrap();
+        let split = bridge_pinched_vertices(&bowtie).unwrap();
+        assert_eq!(split.triangles(), &[[0, 1, 2], [5, 3, 4]]);
+        assert_eq!(split.vertices()[5], v[0]);
+        // A lone face hanging from an octahedron's pole: cut off, the octahedron untouched.
+        let (mut vertices, mut faces) = octahedron([0.0, 0.0, 0.0], 1.0);
+        vertices.extend([[0.5, 0.0, 2.0], [0.0, 0.5, 2.0]]);
+        faces.push([0, 6, 7]);
+        let hanging = TriMesh::new(vertices, faces.clone()).unwrap();
+        let cut = bridge_pinched_vertices(&hanging).unwrap();
+        assert!(is_vertex_manifold(&cut) && is_edge_manifold(&cut));
+        assert_eq!(cut.triangles()[..8], faces[..8]);
+        assert_eq!(cut.triangles()[8], [8, 6, 7]);
         let sphere = icosphere(2);
         assert_eq!(bridge_pinched_vertices(&sphere).unwrap(), sphere);
     }
