@@ -34,9 +34,9 @@ use crate::vec3::{norm, sub, to_f64, triangle_cross};
 /// a dozen faces, and their least-area bridge goes through faces that face each other.
 pub const BRIDGE_CANDIDATES: usize = 8;
 
-/// Other fans a vertex's largest closed fan is bridged to at most (the largest first); the
-/// rest stay, or are split when in its piece. It bounds the work on a vertex of thousands of
-/// fans, a file made to be slow.
+/// Other fans a vertex's largest closed fan is bridged to at most (the largest first); of the
+/// rest, closed fans of other pieces stay and the others are split. It bounds the work on a
+/// vertex of thousands of fans, a file made to be slow.
 pub const MAX_BRIDGES_PER_VERTEX: usize = 64;
 
 /// `mesh` with its pinched vertices bridged or split (module docs): the faces of `mesh` in
