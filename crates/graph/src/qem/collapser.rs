@@ -40,6 +40,9 @@ const FLAG_BITS: u32 = 5;
 /// The largest supported face count: incidence offsets are `u32` (`refs` stays below
 /// `4 · #F + 1024` plus one fan) and a vertex's face count fits in `32 − FLAG_BITS` bits.
 const MAX_FACES: usize = 250_000_000;
+/// Room in `refs` beyond [`refs_limit`]: the fans appended by the batch of collapses that
+/// crosses it (up to 1024 collapses of ~12 faces each).
+const REFS_SLACK: usize = 1 << 16;
 /// Vertices per parallel task of the setup's edge enumeration.
 const EDGE_CHUNK: usize = 2048;
 
@@ -230,7 +233,8 @@ impl Collapser {
             link.0 = total;
             total += link.1;
         }
-        let mut refs = vec![0u32; total as usize];
+        let mut refs = Vec::with_capacity(refs_limit(faces.len()) + REFS_SLACK);
+        refs.resize(total as usize, 0u32);
         let mut fill: Vec<u32> = links.iter().map(|l| l.0).collect();
         for (fi, f) in faces.iter().enumerate() {
             for &v in f {
@@ -499,15 +503,17 @@ impl Collapser {
         if weight > 0.0 {
             self.max_error = self.max_error.max(placement.cost / weight);
         }
-
-        if self.refs.len() > 4 * self.faces.len() + 1024 {
-            self.compact_refs();
-        }
     }
 
-    /// Rewrites `refs` with only the live faces of live vertices.
-    fn compact_refs(&mut self) {
-        let mut refs = Vec::with_capacity(3 * self.live_faces);
+    /// Whether `refs` has grown past [`refs_limit`] and wants [`Collapser::compact_refs`].
+    pub(crate) fn refs_full(&self) -> bool {
+        self.refs.len() > refs_limit(self.faces.len())
+    }
+
+    /// Rewrites `refs` with only the live faces of live vertices, into a buffer as large as
+    /// the old one.
+    pub(crate) fn compact_refs(&mut self) {
+        let mut refs = Vec::with_capacity(self.refs.capacity());
         for v in 0..self.verts.len() {
             let range = self.incident(v as u32);
             let start = refs.len();
@@ -592,4 +598,12 @@ impl Collapser {
             collapses: self.collapses,
         })
     }
+}
+
+/// The length of `refs` (incidence lists, appended to at every collapse) past which it is
+/// compacted (between batches of collapses). `refs` is allocated with room for this and
+/// [`REFS_SLACK`], so the collapse loop, which runs on a pool thread, does not reallocate it
+/// (which would take fresh memory from that thread's allocator arena).
+fn refs_limit(face_count: usize) -> usize {
+    4 * face_count + 1024
 }
