@@ -7,6 +7,7 @@
 //! replacement. One operator per module, named after what it computes.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+mod closest_face;
 mod closest_point_on_triangle;
 mod error;
 mod mesh_hierarchy;
@@ -30,6 +31,7 @@ mod top_curvature_sampling;
 mod triangle_knn_graph;
 mod weighted_sampling;
 
+pub use closest_face::{ClosestFace, FacePoint};
 pub use error::{Error, Result};
 pub use mesh_hierarchy::{HierarchyOptions, MeshHierarchy, build_hierarchy};
 pub use pooling_matrices::{Downsampling, PoolingMatrices, Upsampling, pooling_matrices};

@@ -12,12 +12,11 @@
 //!   identity.
 //! - Features are row-major `(N, C)` slices, as in [`crate::CsrMatrix::mul_dense`].
 
-use meshgnn_geometry::{SpatialIndex, TriMesh, squared_distance};
+use meshgnn_geometry::TriMesh;
 use rayon::prelude::*;
 
-use crate::closest_point_on_triangle::closest_point_on_triangle;
 use crate::error::{Error, Result};
-use crate::{CsrMatrix, Decimation};
+use crate::{ClosestFace, CsrMatrix, Decimation};
 
 /// Down-sampling `D: M×N`, stored as the selected fine vertices.
 #[derive(Debug, Clone, PartialEq)]
@@ -200,23 +199,8 @@ pub fn pooling_matrices(fine: &TriMesh, decimation: &Decimation) -> Result<Pooli
         });
     }
 
-    let cv = coarse.vertices();
     let faces = coarse.triangles();
-    let centroids: Vec<[f32; 3]> = faces
-        .iter()
-        .map(|f| std::array::from_fn(|k| (f.iter().map(|&v| cv[v as usize][k]).sum::<f32>()) / 3.0))
-        .collect();
-    let reach = faces
-        .iter()
-        .zip(&centroids)
-        .map(|(f, c)| {
-            f.iter()
-                .map(|&v| squared_distance(c, &cv[v as usize]))
-                .fold(0.0f32, f32::max)
-                .sqrt()
-        })
-        .fold(0.0f32, f32::max);
-    let tree = SpatialIndex::new(&centroids)?;
+    let closest = ClosestFace::new(coarse)?;
     let coarse_of: Vec<u32> = {
         let mut inverse = vec![u32::MAX; fine.vertex_count()];
         for (j, &i) in kept.iter().enumerate() {
@@ -233,31 +217,15 @@ pub fn pooling_matrices(fine: &TriMesh, decimation: &Decimation) -> Result<Pooli
             if let Some(&j) = coarse_of.get(i).filter(|&&j| j != u32::MAX) {
                 return ([j; 3], [1.0, 0.0, 0.0]);
             }
-            let q = p.map(f64::from);
-            let distance_to = |f: u32| {
-                let tri = faces[f as usize].map(|v| cv[v as usize].map(f64::from));
-                closest_point_on_triangle(q, tri[0], tri[1], tri[2])
-            };
-            tree.nearest(p, 1, None, found);
-            let first = found.first().map_or(0, |n| n.1);
-            let (mut best_w, mut best_d) = distance_to(first);
-            let mut best_f = first;
-            let radius = (best_d.sqrt() as f32 + reach) * (1.0 + 1e-5) + 1e-12;
-            tree.within(p, radius * radius, None, found);
-            for &(_, f) in found.iter() {
-                let (w, d) = distance_to(f);
-                if d < best_d || (d == best_d && f < best_f) {
-                    (best_w, best_d, best_f) = (w, d, f);
-                }
-            }
-            let w = best_w.map(|x| x.clamp(0.0, 1.0) as f32);
+            let hit = closest.query(p, found);
+            let w = hit.weights.map(|x| x.clamp(0.0, 1.0) as f32);
             let sum: f32 = w.iter().sum();
             let w = if sum > 0.0 {
                 w.map(|x| x / sum)
             } else {
                 [1.0, 0.0, 0.0]
             };
-            (faces[best_f as usize], w)
+            (faces[hit.face as usize], w)
         })
         .collect();
     let (indices, weights) = rows.into_iter().unzip();
@@ -277,6 +245,7 @@ pub fn pooling_matrices(fine: &TriMesh, decimation: &Decimation) -> Result<Pooli
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::closest_point_on_triangle::closest_point_on_triangle;
     use crate::{DecimationOptions, Target, decimate};
     use meshgnn_geometry::{grid_plane, icosphere};
 

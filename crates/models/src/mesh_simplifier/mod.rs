@@ -48,10 +48,10 @@ pub use link_message_mean::link_message_mean;
 pub use neighbour_deviation_maximum::neighbour_deviation_maximum;
 pub use neighbour_slots::NeighbourSlots;
 pub use neural_mesh_simplifier::{
-    FACE_THRESHOLD, MAX_CRACK_EDGES, MAX_REBUILT_PART_VERTICES, MAX_WIDE_CRACK_EDGES,
-    MIN_NEURAL_FACES, MIN_WIDE_CRACK_PIECE_FACES, MeshInput, NeuralMeshSimplifier,
-    NeuralMeshSimplifierConfig, NeuralSimplification, NeuralSimplifyOptions,
-    SAMPLER_CLOUD_NEIGHBOURS, SEED_EXCHANGE_ROUNDS, SimplifierPass,
+    FACE_THRESHOLD, MAX_CRACK_EDGES, MAX_REBUILT_PART_VERTICES, MAX_SURFACE_CRACK_EDGES,
+    MAX_WIDE_CRACK_EDGES, MIN_NEURAL_FACES, MIN_WIDE_CRACK_PIECE_FACES, MeshInput,
+    NeuralMeshSimplifier, NeuralMeshSimplifierConfig, NeuralSimplification, NeuralSimplifyOptions,
+    SAMPLER_CLOUD_NEIGHBOURS, SEED_EXCHANGE_ROUNDS, SURFACE_PATCH_TOLERANCE, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{
