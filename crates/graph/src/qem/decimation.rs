@@ -22,7 +22,8 @@
 //!    one-bit-per-vertex "changed" set: lazy invalidation, since only those edges' costs went
 //!    stale). The next pass keeps the still-valid sorted candidates and merges in the
 //!    re-scored edges around the changed vertices (visited in vertex order, for locality).
-//!    The loop itself is sequential, but the placement and checks of the next batch of
+//!    The loop itself is sequential (on a pool thread, which joins each batch's parallel
+//!    work without a wake-up), but the placement and checks of the next batch of
 //!    candidates are evaluated speculatively in parallel (`speculation.rs`) and reused
 //!    unless an earlier collapse of the batch touched what they read, so the result is that
 //!    of the sequential loop; fans are warmed level by level before they are walked
