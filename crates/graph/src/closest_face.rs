@@ -62,7 +62,10 @@ impl<'a> ClosestFace<'a> {
     /// use meshgnn_graph::ClosestFace;
     /// // Two unit triangles, one at z = 0 and one at z = 5.
     /// let pair = TriMesh::new(
-    ///     vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]],
+    ///     vec![
+    ///         [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+    ///         [0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0],
+    ///     ],
     ///     vec![[0, 1, 2], [3, 4, 5]],
     /// )?;
     /// let upper = ClosestFace::among(&pair, vec![1])?;

@@ -38,7 +38,8 @@ const KEPT: u32 = 16;
 /// The flags' bits of [`VertexRecord::meta`]; the incidence list length is stored above them.
 const FLAG_BITS: u32 = 5;
 /// The largest supported face count: incidence offsets are `u32` (`refs` stays below
-/// `4 · #F + 1024` plus one fan) and a vertex's face count fits in `32 − FLAG_BITS` bits.
+/// `4 · #F + 1024` plus one batch of fans) and a vertex's face count fits in
+/// `32 − FLAG_BITS` bits.
 const MAX_FACES: usize = 250_000_000;
 /// Room in `refs` beyond [`refs_limit`]: the fans appended by the batch of collapses that
 /// crosses it (up to 1024 collapses of ~12 faces each).

@@ -17,7 +17,8 @@
 //! that surface ([`remove_overlays`]), gives each closed part of the input it kept only a seed
 //! floor's worth of vertices and left open the hull of those vertices
 //! ([`hull_small_open_parts`], beyond the thesis), fills the cracks of at most
-//! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece), beside the
+//! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece, of
+//! [`MAX_SURFACE_CRACK_EDGES`] there along the input part's surface), beside the
 //! input's border only where the input joins their corners ([`fill_holes_where`],
 //! [`voronoi_dual_edges`], with a centre vertex where no triangulation of a crack's corners
 //! fits), rebuilds each small closed part still left open as QEM connects its
@@ -178,7 +179,8 @@ pub struct NeuralSimplifyOptions {
     /// edges (at most [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`]), the input's borders
     /// included, after the placement; `None`: only the cracks of at most [`MAX_CRACK_EDGES`]
     /// edges ([`MAX_WIDE_CRACK_EDGES`] in a piece of [`MIN_WIDE_CRACK_PIECE_FACES`] faces or
-    /// more) away from the input's border, before it.
+    /// more, [`MAX_SURFACE_CRACK_EDGES`] there along the input part's surface) away from the
+    /// input's border, before it.
     pub fill_holes_up_to: Option<usize>,
     /// Leave the selected vertices at their input positions (the thesis' output) instead of
     /// moving each to its region's quadric optimum.
@@ -438,10 +440,10 @@ impl NeuralMeshSimplifier {
     /// ([`meshgnn_geometry::flip_folds`]) and its overlays removed, each closed part of at
     /// most [`MIN_COMPONENT_SEEDS`] kept vertices its faces leave open replaced by their hull
     /// ([`hull_small_open_parts`]), unless `options.fill_holes_up_to` is set the cracks inside
-    /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`]), each closed part of at most
-    /// [`MAX_REBUILT_PART_VERTICES`] kept vertices still open rebuilt as QEM connects them
-    /// (`qem_connected_part`), faces hanging from a closed piece of a closed input part
-    /// dropped ([`remove_flaps`]), the vertices placed unless
+    /// filled ([`MAX_CRACK_EDGES`], [`MAX_WIDE_CRACK_EDGES`], [`MAX_SURFACE_CRACK_EDGES`]),
+    /// each closed part of at most [`MAX_REBUILT_PART_VERTICES`] kept vertices still open
+    /// rebuilt as QEM connects them (`qem_connected_part`), faces hanging from a closed piece
+    /// of a closed input part dropped ([`remove_flaps`]), the vertices placed unless
     /// `options.keep_positions`, then, with `options.fill_holes_up_to: Some(k)`, the cracks
     /// closed with rejected candidates and every hole of at most `k` edges filled; last, cap
     /// faces (three kept vertices along a straight crease) flipped away
@@ -677,13 +679,17 @@ pub const MIN_WIDE_CRACK_PIECE_FACES: usize = 30;
 
 /// `selected` (vertex `i` standing for `input` vertex `vertex_map[i]`) with its cracks filled:
 /// holes of at most [`MAX_CRACK_EDGES`] edges, and of at most [`MAX_WIDE_CRACK_EDGES`] in a
-/// piece (vertices joined by faces) of at least [`MIN_WIDE_CRACK_PIECE_FACES`] faces. A hole
+/// piece (vertices joined by faces) of at least [`MIN_WIDE_CRACK_PIECE_FACES`] faces, or of at
+/// most [`MAX_SURFACE_CRACK_EDGES`] there when the patch lies along the surface of the input
+/// part its corners stand for ([`SURFACE_PATCH_TOLERANCE`]). A hole
 /// with a corner standing for a vertex on `input`'s border is a crack only where the input's
 /// surface joins the ends of every edge of its patch (their geodesic regions meet,
 /// [`voronoi_dual_edges`]): beside the border, not across an opening of the input. A crack no
 /// triangulation of its corners closes gets a centre vertex.
 fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -> Result<TriMesh> {
-    let mut corners: Vec<u32> = boundary_loops(selected).into_iter().flatten().collect();
+    let holes = boundary_loops(selected);
+    let long_holes = holes.iter().any(|hole| hole.len() > MAX_WIDE_CRACK_EDGES);
+    let mut corners: Vec<u32> = holes.into_iter().flatten().collect();
     if corners.is_empty() {
         return Ok(selected.clone());
     }
@@ -694,9 +700,6 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
     for (&v, border) in corners.iter().zip(on_border(input, &standing_for)) {
         on_input_border[v as usize] = border;
     }
-    let long_holes = boundary_loops(selected)
-        .iter()
-        .any(|hole| hole.len() > MAX_WIDE_CRACK_EDGES);
     // Sorted: searched by halving.
     let joined: Vec<[u32; 2]> = if on_input_border.contains(&true) {
         voronoi_dual_edges(input, vertex_map)?
