@@ -117,26 +117,11 @@ impl<'a> ClosestFace<'a> {
     /// The face closest to `p` and the closest point on it. `scratch` is reused between
     /// queries.
     pub fn query(&self, p: &[f32; 3], scratch: &mut Vec<(f32, u32)>) -> FacePoint {
-        let q = p.map(f64::from);
-        let v = self.mesh.vertices();
-        let to = |slot: u32| {
-            let face = self.faces[slot as usize];
-            let corners =
-                self.mesh.triangles()[face as usize].map(|i| v[i as usize].map(f64::from));
-            let (weights, squared_distance) =
-                closest_point_on_triangle(q, corners[0], corners[1], corners[2]);
-            FacePoint {
-                face,
-                weights,
-                squared_distance,
-            }
-        };
         self.centroids.nearest(p, 1, None, scratch);
-        let mut best = to(scratch.first().map_or(0, |n| n.1));
-        let radius = (best.squared_distance.sqrt() as f32 + self.reach) * (1.0 + 1e-5) + 1e-12;
-        self.centroids.within(p, radius * radius, None, scratch);
+        let mut best = self.face_point(p, scratch.first().map_or(0, |n| n.1));
+        self.centroids_within(p, best.squared_distance.sqrt(), scratch);
         for &(_, slot) in scratch.iter() {
-            let hit = to(slot);
+            let hit = self.face_point(p, slot);
             if hit.squared_distance < best.squared_distance
                 || (hit.squared_distance == best.squared_distance && hit.face < best.face)
             {
@@ -144,6 +129,59 @@ impl<'a> ClosestFace<'a> {
             }
         }
         best
+    }
+
+    /// The faces within `radius` of `p`, each with its closest point, in no set order.
+    /// `scratch` is reused between queries.
+    ///
+    /// ```
+    /// use meshgnn_geometry::TriMesh;
+    /// use meshgnn_graph::ClosestFace;
+    /// let square = TriMesh::new(
+    ///     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+    ///     vec![[0, 1, 2], [0, 2, 3]],
+    /// )?;
+    /// let closest = ClosestFace::new(&square)?;
+    /// let mut scratch = Vec::new();
+    /// // Beside the diagonal both faces are near; a point off the lower right corner is near
+    /// // only the face holding it.
+    /// assert_eq!(closest.within(&[0.5, 0.5, 0.1], 0.2, &mut scratch).count(), 2);
+    /// let near: Vec<u32> = closest.within(&[1.2, -0.1, 0.0], 0.3, &mut scratch).map(|h| h.face).collect();
+    /// assert_eq!(near, vec![0]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn within<'s>(
+        &'s self,
+        p: &'s [f32; 3],
+        radius: f64,
+        scratch: &'s mut Vec<(f32, u32)>,
+    ) -> impl Iterator<Item = FacePoint> + 's {
+        self.centroids_within(p, radius, scratch);
+        scratch
+            .iter()
+            .map(|&(_, slot)| self.face_point(p, slot))
+            .filter(move |hit| hit.squared_distance <= radius * radius)
+    }
+
+    /// Fills `scratch` with the centroids (distance, slot) that may hold a face within
+    /// `radius` of `p`: those within `radius` plus the reach.
+    fn centroids_within(&self, p: &[f32; 3], radius: f64, scratch: &mut Vec<(f32, u32)>) {
+        let ball = (radius as f32 + self.reach) * (1.0 + 1e-5) + 1e-12;
+        self.centroids.within(p, ball * ball, None, scratch);
+    }
+
+    /// The closest point to `p` on the indexed face at `slot`.
+    fn face_point(&self, p: &[f32; 3], slot: u32) -> FacePoint {
+        let face = self.faces[slot as usize];
+        let v = self.mesh.vertices();
+        let corners = self.mesh.triangles()[face as usize].map(|i| v[i as usize].map(f64::from));
+        let (weights, squared_distance) =
+            closest_point_on_triangle(p.map(f64::from), corners[0], corners[1], corners[2]);
+        FacePoint {
+            face,
+            weights,
+            squared_distance,
+        }
     }
 }
 
@@ -164,6 +202,7 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             ((state >> 33) as f64 / (1u64 << 31) as f64) * 3.0 - 1.5
         };
+        let mut points_near_faces = 0;
         for _ in 0..300 {
             let p = [coordinate(), coordinate(), coordinate()].map(|x| x as f32);
             let q = p.map(f64::from);
@@ -177,12 +216,29 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             let hit = closest.query(&p, &mut scratch);
             assert!((hit.squared_distance - brute).abs() <= 1e-12, "{p:?}");
+            // The faces within a radius: those a search over every face finds, none else.
+            let near_radius = 0.3;
+            let mut near: Vec<u32> = closest
+                .within(&p, near_radius, &mut scratch)
+                .map(|h| h.face)
+                .collect();
+            near.sort_unstable();
+            let every: Vec<u32> = (0..sphere.face_count() as u32)
+                .filter(|&f| {
+                    let t = sphere.triangles()[f as usize];
+                    let c = t.map(|i| sphere.vertices()[i as usize].map(f64::from));
+                    closest_point_on_triangle(q, c[0], c[1], c[2]).1 <= near_radius * near_radius
+                })
+                .collect();
+            assert_eq!(near, every, "{p:?}");
+            points_near_faces += usize::from(!near.is_empty());
             // The icosphere is inscribed in the unit sphere: at most its distance outside.
             let radius = q.iter().map(|x| x * x).sum::<f64>().sqrt();
             if radius > 1.0 {
                 assert!(hit.squared_distance.sqrt() >= radius - 1.0 - 1e-6);
             }
         }
+        assert!(points_near_faces >= 50, "{points_near_faces}");
     }
 
     #[test]

@@ -31,6 +31,7 @@ mod simplification_loss;
 mod simplified_adjacency;
 mod simplifier_training;
 mod slot_dot_products;
+mod surface_patch;
 mod tri_conv;
 
 pub use candidate_features::{CANDIDATE_FEATURES, candidate_features};
@@ -51,7 +52,7 @@ pub use neural_mesh_simplifier::{
     FACE_THRESHOLD, MAX_CRACK_EDGES, MAX_REBUILT_PART_VERTICES, MAX_SURFACE_CRACK_EDGES,
     MAX_WIDE_CRACK_EDGES, MIN_NEURAL_FACES, MIN_WIDE_CRACK_PIECE_FACES, MeshInput,
     NeuralMeshSimplifier, NeuralMeshSimplifierConfig, NeuralSimplification, NeuralSimplifyOptions,
-    SAMPLER_CLOUD_NEIGHBOURS, SEED_EXCHANGE_ROUNDS, SURFACE_PATCH_TOLERANCE, SimplifierPass,
+    SAMPLER_CLOUD_NEIGHBOURS, SEED_EXCHANGE_ROUNDS, SimplifierPass,
 };
 pub use point_sampler::{PointSampler, PointSamplerConfig, SampledPoints};
 pub use simplification_loss::{
@@ -61,4 +62,5 @@ pub use simplifier_training::{
     SimplifierExample, SimplifierLosses, SimplifierTraining, VALIDATION_RATIOS, qem_importance,
 };
 pub use slot_dot_products::slot_dot_products;
+pub use surface_patch::{SURFACE_PATCH_NORMAL_AGREEMENT, SURFACE_PATCH_TOLERANCE};
 pub use tri_conv::{TriConv, TriConvConfig};

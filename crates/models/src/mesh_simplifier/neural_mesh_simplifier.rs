@@ -17,11 +17,12 @@
 //! that surface ([`remove_overlays`]), gives each closed part of the input it kept only a seed
 //! floor's worth of vertices and left open the hull of those vertices
 //! ([`hull_small_open_parts`], beyond the thesis), fills the cracks of at most
-//! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece, of
-//! [`MAX_SURFACE_CRACK_EDGES`] there along the input part's surface), beside the
+//! [`MAX_CRACK_EDGES`] edges (of [`MAX_WIDE_CRACK_EDGES`] in a large piece), beside the
 //! input's border only where the input joins their corners ([`fill_holes_where`],
 //! [`voronoi_dual_edges`], with a centre vertex where no triangulation of a crack's corners
-//! fits), rebuilds each small closed part still left open as QEM connects its
+//! fits), and of [`MAX_SURFACE_CRACK_EDGES`] where the patch lies along the input's surface
+//! its corners stand for (in a large piece or on an open input part, beside the border
+//! too), rebuilds each small closed part still left open as QEM connects its
 //! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis),
 //! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`]),
 //! closes each face no other face touches into a tetrahedron over the input behind it
@@ -48,7 +49,6 @@
 //!   placed; the centre vertices of filled holes, the vertices a rebuilt part holds and the
 //!   copies of split pinched vertices (where the vertex stands in the input) follow them.
 
-use std::collections::HashMap;
 use std::panic::resume_unwind;
 
 use candle_core::{Device, Tensor};
@@ -58,15 +58,16 @@ use meshgnn_geometry::{
     close_cracks, close_lone_faces, component_seed_floor, connected_components, fill_holes,
     fill_holes_where, flip_caps, flip_folds, hull_small_open_parts, nearest_seed_dual_triangles,
     on_border, rebuild_small_open_parts, remove_flaps, remove_overlays, select_manifold_faces,
-    squared_distance, unit_sphere_normalization, vertex_normals, voronoi_dual_edges,
+    unit_sphere_normalization, vertex_normals, voronoi_dual_edges,
 };
 use meshgnn_graph::{
-    ClosestFace, CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order,
-    kept_vertex_connectivity, region_quadric_placement, region_quadric_vertices,
-    region_seed_exchange, systematic_sampling, vertex_adjacency, weld_coincident_vertices,
+    CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order, kept_vertex_connectivity,
+    region_quadric_placement, region_quadric_vertices, region_seed_exchange, systematic_sampling,
+    vertex_adjacency, weld_coincident_vertices,
 };
 use meshgnn_losses::metrics::watertightness;
 
+use super::surface_patch::InputSurface;
 use super::{
     CandidateFaces, EdgePredictor, EdgePredictorConfig, ExtendedGraph, FaceClassifier,
     FaceClassifierConfig, FaceGraph, NeighbourSlots, PointSampler, PointSamplerConfig,
@@ -179,8 +180,8 @@ pub struct NeuralSimplifyOptions {
     /// edges (at most [`meshgnn_geometry::MAX_FILLED_HOLE_EDGES`]), the input's borders
     /// included, after the placement; `None`: only the cracks of at most [`MAX_CRACK_EDGES`]
     /// edges ([`MAX_WIDE_CRACK_EDGES`] in a piece of [`MIN_WIDE_CRACK_PIECE_FACES`] faces or
-    /// more, [`MAX_SURFACE_CRACK_EDGES`] there along the input part's surface) away from the
-    /// input's border, before it.
+    /// more, away from the input's border; [`MAX_SURFACE_CRACK_EDGES`] where the patch lies
+    /// along the input's surface), before it.
     pub fill_holes_up_to: Option<usize>,
     /// Leave the selected vertices at their input positions (the thesis' output) instead of
     /// moving each to its region's quadric optimum.
@@ -659,17 +660,12 @@ pub const MAX_CRACK_EDGES: usize = 4;
 /// 0.012 %; 12 raised the real set's CD at 20 and 50 % (1.94 → 2.02×, 1.55 → 1.78×).
 pub const MAX_WIDE_CRACK_EDGES: usize = 8;
 
-/// Holes of up to this many edges are cracks too, in a piece of at least
-/// [`MIN_WIDE_CRACK_PIECE_FACES`] faces, where their least-area patch lies along the input's
-/// surface ([`SURFACE_PATCH_TOLERANCE`]) (docs/mesh_simplifier_model.md, "Longer cracks
-/// closed along the surface").
+/// Holes of up to this many edges are cracks too where their least-area patch lies along the
+/// input's surface their corners stand for (`InputSurface::lies_along`), in a piece of at
+/// least [`MIN_WIDE_CRACK_PIECE_FACES`] faces or on an open input part, beside the input's
+/// border too (docs/mesh_simplifier_model.md, "Longer cracks closed along the surface",
+/// "Cracks beside the border closed along the surface").
 pub const MAX_SURFACE_CRACK_EDGES: usize = 32;
-
-/// How far from the input's surface the centroid of a patch triangle of a hole longer than
-/// [`MAX_WIDE_CRACK_EDGES`] may lie, in units of the triangle's mean edge length. The
-/// network's own faces reach 0.30 on a 5 % creature (median 0.05, 99th percentile 0.27); a
-/// patch across an opening, a fraction of the opening's width.
-pub const SURFACE_PATCH_TOLERANCE: f64 = 0.25;
 
 /// The fewest faces a piece of the output holds for [`MAX_WIDE_CRACK_EDGES`] to apply: in a
 /// smaller one such a hole is the piece's own outline. 15, 30 and 100 measured; 30 is at or
@@ -679,16 +675,17 @@ pub const MIN_WIDE_CRACK_PIECE_FACES: usize = 30;
 
 /// `selected` (vertex `i` standing for `input` vertex `vertex_map[i]`) with its cracks filled:
 /// holes of at most [`MAX_CRACK_EDGES`] edges, and of at most [`MAX_WIDE_CRACK_EDGES`] in a
-/// piece (vertices joined by faces) of at least [`MIN_WIDE_CRACK_PIECE_FACES`] faces, or of at
-/// most [`MAX_SURFACE_CRACK_EDGES`] there when the patch lies along the surface of the input
-/// part its corners stand for ([`SURFACE_PATCH_TOLERANCE`]). A hole
-/// with a corner standing for a vertex on `input`'s border is a crack only where the input's
-/// surface joins the ends of every edge of its patch (their geodesic regions meet,
+/// piece (vertices joined by faces) of at least [`MIN_WIDE_CRACK_PIECE_FACES`] faces; there, a
+/// hole with a corner standing for a vertex on `input`'s border is a crack only where the
+/// input's surface joins the ends of every edge of its patch (their geodesic regions meet,
 /// [`voronoi_dual_edges`]): beside the border, not across an opening of the input. A crack no
-/// triangulation of its corners closes gets a centre vertex.
+/// triangulation of its corners closes gets a centre vertex. Then any hole of at most
+/// [`MAX_SURFACE_CRACK_EDGES`] edges left, beside the border or not, whose least-area patch
+/// lies along the input's surface its corners stand for (`InputSurface::lies_along`), in a
+/// large piece or on an open input part (a small piece of a closed part is rebuilt after
+/// this, `rebuild_small_open_parts`).
 fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -> Result<TriMesh> {
     let holes = boundary_loops(selected);
-    let long_holes = holes.iter().any(|hole| hole.len() > MAX_WIDE_CRACK_EDGES);
     let mut corners: Vec<u32> = holes.into_iter().flatten().collect();
     if corners.is_empty() {
         return Ok(selected.clone());
@@ -740,58 +737,18 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
             .all(|&v| !kept(v) || in_large_piece(v))
             && crack(patch)
     })?;
-    if !long_holes {
-        return Ok(wide_cracks_closed);
-    }
-    // A longer hole is a crack where its patch lies along the surface of the input part its
-    // corners stand for, as the network's faces do: every patch triangle's centroid within
-    // SURFACE_PATCH_TOLERANCE of its mean edge length from that part (not across an opening
-    // of it, whatever other part lies near: a lid over a pot's opening).
-    let (parts, part_of) = connected_components(input);
-    let mut part_faces = vec![Vec::new(); parts];
-    for (f, t) in input.triangles().iter().enumerate() {
-        part_faces[part_of[t[0] as usize] as usize].push(f as u32);
-    }
-    let mut indexed: HashMap<u32, Option<ClosestFace>> = HashMap::new();
-    let mut scratch = Vec::new();
+    // Any hole left is a crack where its patch lies along the input's surface; a small piece
+    // of a closed part is left whole to the rebuild after this.
+    let mut surface = InputSurface::new(input, vertex_map);
     let positions = wide_cracks_closed.vertices();
+    let on_open_part = on_open_parts(input, vertex_map);
     Ok(fill_holes_where(
         &wide_cracks_closed,
         MAX_SURFACE_CRACK_EDGES,
         |patch| {
-            let part = |v: u32| part_of[vertex_map[v as usize] as usize];
-            let Some(first) = patch.first().map(|t| t[0]).filter(|&v| kept(v)) else {
-                return false;
-            };
-            if !patch
-                .iter()
-                .flatten()
-                .all(|&v| kept(v) && in_large_piece(v) && part(v) == part(first))
-                || !crack(patch)
-            {
-                return false;
-            }
-            let Some(closest) = indexed
-                .entry(part(first))
-                .or_insert_with(|| {
-                    ClosestFace::among(input, std::mem::take(&mut part_faces[part(first) as usize]))
-                        .ok()
-                })
-                .as_ref()
-            else {
-                return false;
-            };
-            patch.iter().all(|t| {
-                let corners = t.map(|v| positions[v as usize]);
-                let centroid: [f32; 3] =
-                    std::array::from_fn(|k| corners.iter().map(|c| c[k]).sum::<f32>() / 3.0);
-                let mean_edge = (0..3)
-                    .map(|i| f64::from(squared_distance(&corners[i], &corners[(i + 1) % 3])).sqrt())
-                    .sum::<f64>()
-                    / 3.0;
-                let hit = closest.query(&centroid, &mut scratch);
-                hit.squared_distance.sqrt() <= SURFACE_PATCH_TOLERANCE * mean_edge
-            })
+            patch.iter().flatten().all(|&v| {
+                in_large_piece(v) || on_open_part.get(v as usize).copied().unwrap_or(false)
+            }) && surface.lies_along(patch, positions)
         },
     )?)
 }
@@ -941,6 +898,37 @@ mod tests {
     }
 
     #[test]
+    fn a_crack_in_a_small_piece_of_an_open_part_is_filled() {
+        // A 5 × 4-cell plane less a block of 3 × 2 cells inside it: 28 faces, fewer than
+        // MIN_WIDE_CRACK_PIECE_FACES, around a hole of 10 edges the plane spans. An open part
+        // gets no rebuild after this (rebuild_small_open_parts takes closed parts), so the
+        // hole is closed here.
+        let plane = meshgnn_geometry::grid_plane(5, 4);
+        let every: Vec<u32> = (0..plane.vertex_count() as u32).collect();
+        let in_block = |t: &[u32; 3]| {
+            t.iter()
+                .all(|&v| (1..=4).contains(&(v % 6)) && (1..=3).contains(&(v / 6)))
+        };
+        let faces: Vec<[u32; 3]> = plane
+            .triangles()
+            .iter()
+            .filter(|t| !in_block(t))
+            .copied()
+            .collect();
+        let cracked = TriMesh::new(plane.vertices().to_vec(), faces).unwrap();
+        assert!(cracked.face_count() < MIN_WIDE_CRACK_PIECE_FACES);
+        assert!(boundary_loops(&cracked).iter().any(|l| l.len() == 10));
+        let filled = fill_cracks_inside(&plane, &every, &cracked).unwrap();
+        assert_eq!(
+            boundary_loops(&filled).len(),
+            1,
+            "only the plane's rim is left"
+        );
+        let area = |m: &TriMesh| meshgnn_geometry::face_areas(m).iter().sum::<f64>();
+        assert!((area(&filled) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
     fn another_input_part_beside_a_hole_does_not_decide_it() {
         // A plane with a 6 × 6-cell opening; the selection misses the 8 × 8 cells around it,
         // so the hole's corners lie one cell off the input's border (as a network's rim may).
@@ -983,9 +971,27 @@ mod tests {
             .iter()
             .map(|t| t.map(|v| v + count))
             .collect();
-        let with_lid = TriMesh::new(vertices.clone(), [lower, lid.clone()].concat()).unwrap();
-        let selected = TriMesh::new(vertices, [selected_lower, lid].concat()).unwrap();
+        let with_lid =
+            TriMesh::new(vertices.clone(), [lower.clone(), lid.clone()].concat()).unwrap();
+        let selected = TriMesh::new(
+            vertices.clone(),
+            [selected_lower.clone(), lid.clone()].concat(),
+        )
+        .unwrap();
         let every: Vec<u32> = (0..2 * count).collect();
+        let left = fill_cracks_inside(&with_lid, &every, &selected).unwrap();
+        assert_eq!(left.triangles(), selected.triangles());
+        // The lid joined to the plane at a corner (one part, as a teapot's lid may touch its
+        // pot): the faces under the patch are the lid's, which the hole's corners do not
+        // stand for, and it stays.
+        let joined: Vec<[u32; 3]> = lid
+            .iter()
+            .map(|t| t.map(|v| if v == count { 0 } else { v }))
+            .collect();
+        let with_lid = TriMesh::new(vertices.clone(), [lower, joined.clone()].concat()).unwrap();
+        let (_, part) = connected_components(&with_lid);
+        assert_eq!(part[0], part[count as usize + 1]);
+        let selected = TriMesh::new(vertices, [selected_lower, joined].concat()).unwrap();
         let left = fill_cracks_inside(&with_lid, &every, &selected).unwrap();
         assert_eq!(left.triangles(), selected.triangles());
     }
