@@ -26,7 +26,7 @@ pub const SURFACE_PATCH_NORMAL_AGREEMENT: f64 = 0.5;
 
 /// The input's surface, indexed per part (vertices joined by faces) as holes ask for it,
 /// with the geodesic regions of the selected vertices (docs/mesh_simplifier_model.md,
-/// "Cracks closed along the surface").
+/// "Cracks beside the border closed along the surface").
 pub(crate) struct InputSurface<'a> {
     input: &'a TriMesh,
     /// `vertex_map[i]`: the input vertex selected vertex `i` stands for.
