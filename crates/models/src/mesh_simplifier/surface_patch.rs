@@ -21,7 +21,8 @@ pub const SURFACE_PATCH_TOLERANCE: f64 = 0.25;
 /// The least |cosine| between a patch triangle's normal and that of an input face near it for
 /// the face to lie under it (60°): beside a cap across a thin part's open end the input's
 /// faces stand at about 90° to it. Unsigned, since inputs stored as patches need not be
-/// oriented consistently (the airplane's faces under a crack point either way).
+/// oriented consistently (the airplane's faces under a crack point either way). 0.4 and 0.6
+/// measured: the real set's WA after the pass and CD move by at most 0.13 and 0.01.
 pub const SURFACE_PATCH_NORMAL_AGREEMENT: f64 = 0.5;
 
 /// The input's surface, indexed per part (vertices joined by faces) as holes ask for it,
