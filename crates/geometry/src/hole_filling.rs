@@ -41,7 +41,7 @@ pub const MAX_FILLED_HOLE_EDGES: usize = 1000;
 /// # Ok::<(), meshgnn_geometry::Error>(())
 /// ```
 pub fn fill_holes(mesh: &TriMesh, max_edges: usize) -> Result<TriMesh> {
-    fill(mesh, max_edges, &mut |_| true, false)
+    fill(mesh, max_edges, &mut |patch| vec![true; patch.len()], false)
 }
 
 /// [`fill_holes`] leaving open every hole whose patch `closable` refuses (its triangles; a
@@ -69,15 +69,46 @@ pub fn fill_holes_where(
     max_edges: usize,
     mut closable: impl FnMut(&[[u32; 3]]) -> bool,
 ) -> Result<TriMesh> {
-    fill(mesh, max_edges, &mut closable, true)
+    fill(
+        mesh,
+        max_edges,
+        &mut |patch| vec![closable(patch); patch.len()],
+        true,
+    )
 }
 
-/// The filling of [`fill_holes`] and [`fill_holes_where`]: with `refuse_pillows` a hole
-/// whose least-area patch repeats an existing face's corners stays open.
+/// [`fill_holes_where`] adding, of each hole's patch, the triangles `keep` marks (one flag per
+/// triangle): where a hole joins a crack to an opening that should stay, the crack's part of
+/// the patch closes and the opening stays, its rim now running along the patch's diagonals.
+/// Every edge still has at most two faces (a diagonal is never an existing edge).
+///
+/// ```
+/// use meshgnn_geometry::{boundary_loops, fill_holes_partly, icosphere, TriMesh};
+/// let sphere = icosphere(2);
+/// let mut faces = sphere.triangles().to_vec();
+/// faces.truncate(faces.len() - 4); // four faces off: one hole of six edges
+/// let open = TriMesh::new(sphere.vertices().to_vec(), faces)?;
+/// // Of its four patch triangles, the first two.
+/// let half = fill_holes_partly(&open, 30, |patch| (0..patch.len()).map(|i| i < 2).collect())?;
+/// assert_eq!(half.face_count(), open.face_count() + 2);
+/// assert_eq!(boundary_loops(&half).len(), 1);
+/// # Ok::<(), meshgnn_geometry::Error>(())
+/// ```
+pub fn fill_holes_partly(
+    mesh: &TriMesh,
+    max_edges: usize,
+    mut keep: impl FnMut(&[[u32; 3]]) -> Vec<bool>,
+) -> Result<TriMesh> {
+    fill(mesh, max_edges, &mut keep, true)
+}
+
+/// The filling of [`fill_holes`], [`fill_holes_where`] and [`fill_holes_partly`]: of each
+/// hole's patch the triangles `keep` marks are added; with `refuse_pillows` a hole whose
+/// least-area patch repeats an existing face's corners stays open.
 fn fill(
     mesh: &TriMesh,
     max_edges: usize,
-    closable: &mut dyn FnMut(&[[u32; 3]]) -> bool,
+    keep: &mut dyn FnMut(&[[u32; 3]]) -> Vec<bool>,
     refuse_pillows: bool,
 ) -> Result<TriMesh> {
     if max_edges > MAX_FILLED_HOLE_EDGES {
@@ -118,14 +149,20 @@ fn fill(
             Some(patch) => (patch, None),
             None => centre_fan(&vertices, &hole),
         };
-        if !closable(&patch) {
-            continue;
+        let marks = keep(&patch);
+        let kept: Vec<[u32; 3]> = patch
+            .iter()
+            .zip(marks.iter().chain(std::iter::repeat(&false)))
+            .filter_map(|(&t, &kept)| kept.then_some(t))
+            .collect();
+        let centre_index = vertices.len() as u32;
+        if kept.iter().flatten().any(|&v| v == centre_index) {
+            vertices.extend(centre);
         }
-        vertices.extend(centre);
-        for &[a, b, c] in &patch {
+        for &[a, b, c] in &kept {
             edges.extend([key(a, b), key(b, c), key(c, a)]);
         }
-        faces.extend(patch);
+        faces.extend(kept);
     }
     TriMesh::new(vertices, faces)
 }
@@ -348,11 +385,10 @@ mod tests {
         assert!(least_area_triangulation(&v, &[0, 1, 2, 3], &both).is_none());
     }
 
-    #[test]
-    fn a_hole_whose_diagonals_are_both_edges_closes_with_a_centre_vertex() {
-        // A tetrahedron 0-1-2-3 without the two faces on (0, 2): the hole 0-1-2-3 has (1, 3)
-        // as an inner edge; a second tetrahedron 0-2-4-5 holds (0, 2). No triangulation of
-        // the four corners avoids both.
+    /// A tetrahedron 0-1-2-3 without the two faces on (0, 2): the hole 0-1-2-3 has (1, 3) as
+    /// an inner edge; a second tetrahedron 0-2-4-5 holds (0, 2). No triangulation of the four
+    /// corners avoids both.
+    fn hole_with_both_diagonals_taken() -> (Vec<[f32; 3]>, TriMesh) {
         let v = vec![
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
@@ -369,7 +405,12 @@ mod tests {
             [0, 4, 5],
             [2, 5, 4],
         ];
-        let open = TriMesh::new(v.clone(), faces).unwrap();
+        (v.clone(), TriMesh::new(v, faces).unwrap())
+    }
+
+    #[test]
+    fn a_hole_whose_diagonals_are_both_edges_closes_with_a_centre_vertex() {
+        let (v, open) = hole_with_both_diagonals_taken();
         assert!(is_edge_manifold(&open));
         assert_eq!(boundary_loops(&open).len(), 1);
         let closed = fill_holes(&open, 30).unwrap();
@@ -395,6 +436,62 @@ mod tests {
                     .any(|t| { (0..3).any(|i| t[i] == b && t[(i + 1) % 3] == a) })
             );
         }
+    }
+
+    #[test]
+    fn a_partly_kept_patch_adds_only_its_marked_triangles() {
+        // Cells (1, 1) and (2, 1) of a 4×4 grid off: one hole of six edges, four patch
+        // triangles (the outer rim, 16 edges, stays open).
+        let grid = grid_plane(4, 4);
+        let cell = |f: usize| {
+            let c = grid.triangle_positions(f);
+            let side = grid.vertices()[1][0] - grid.vertices()[0][0];
+            let lo = grid.vertices()[0];
+            let at = |k: usize| ((c[0][k] + c[1][k] + c[2][k]) / 3.0 - lo[k]) / side;
+            (at(0) as u32, at(1) as u32)
+        };
+        let cut: Vec<usize> = (0..grid.face_count())
+            .filter(|&f| matches!(cell(f), (1, 1) | (2, 1)))
+            .collect();
+        assert_eq!(cut.len(), 4);
+        let open = without(&grid, &cut);
+        let mut seen = Vec::new();
+        let every_other = fill_holes_partly(&open, 6, |patch| {
+            seen = patch.to_vec();
+            (0..patch.len()).map(|i| i % 2 == 0).collect()
+        })
+        .unwrap();
+        assert_eq!(seen.len(), 4);
+        let added = &every_other.triangles()[open.face_count()..];
+        assert_eq!(added, [seen[0], seen[2]]);
+        assert_eq!(every_other.vertex_count(), open.vertex_count());
+        assert!(is_edge_manifold(&every_other));
+        let up = triangle_cross(grid.triangle_positions(0))[2].signum();
+        for f in open.face_count()..every_other.face_count() {
+            assert_eq!(
+                triangle_cross(every_other.triangle_positions(f))[2].signum(),
+                up
+            );
+        }
+        // All marked: the same as `fill_holes`; none marked: unchanged.
+        let all = fill_holes_partly(&open, 6, |patch| vec![true; patch.len()]).unwrap();
+        assert_eq!(all.triangles(), fill_holes(&open, 6).unwrap().triangles());
+        let none = fill_holes_partly(&open, 6, |patch| vec![false; patch.len()]).unwrap();
+        assert_eq!(none.triangles(), open.triangles());
+    }
+
+    #[test]
+    fn a_centre_vertex_is_added_only_when_a_kept_triangle_uses_it() {
+        let (v, open) = hole_with_both_diagonals_taken();
+        let one = fill_holes_partly(&open, 30, |patch| {
+            (0..patch.len()).map(|i| i == 0).collect()
+        })
+        .unwrap();
+        assert_eq!(one.vertex_count(), v.len() + 1);
+        assert_eq!(one.face_count(), open.face_count() + 1);
+        assert!(is_edge_manifold(&one));
+        let none = fill_holes_partly(&open, 30, |patch| vec![false; patch.len()]).unwrap();
+        assert_eq!(none.vertex_count(), v.len());
     }
 
     #[test]

@@ -105,7 +105,7 @@ pub use graph_laplacian::{
     combinatorial_laplacian, combinatorial_laplacian_of_mesh, normalized_laplacian,
     normalized_laplacian_of_mesh,
 };
-pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes, fill_holes_where};
+pub use hole_filling::{MAX_FILLED_HOLE_EDGES, fill_holes, fill_holes_partly, fill_holes_where};
 pub use input_content::{
     InputUse, MAX_COORDINATE_MAGNITUDE, check_input_mesh, check_input_points, read_input_mesh,
     read_input_point_cloud,

@@ -56,9 +56,10 @@ use candle_nn::VarBuilder;
 use meshgnn_geometry::{
     MIN_COMPONENT_SEEDS, OpenPart, PartSurface, TriMesh, boundary_loops, bridge_pinched_vertices,
     close_cracks, close_lone_faces, component_seed_floor, connected_components, fill_holes,
-    fill_holes_where, flip_caps, flip_folds, hull_small_open_parts, nearest_seed_dual_triangles,
-    on_border, rebuild_small_open_parts, remove_flaps, remove_overlays, select_manifold_faces,
-    unit_sphere_normalization, vertex_normals, voronoi_dual_edges,
+    fill_holes_partly, fill_holes_where, flip_caps, flip_folds, hull_small_open_parts,
+    nearest_seed_dual_triangles, on_border, rebuild_small_open_parts, remove_flaps,
+    remove_overlays, select_manifold_faces, unit_sphere_normalization, vertex_normals,
+    voronoi_dual_edges,
 };
 use meshgnn_graph::{
     CsrMatrix, SeedRegions, Target, WeldedMesh, hilbert_order, kept_vertex_connectivity,
@@ -67,7 +68,7 @@ use meshgnn_graph::{
 };
 use meshgnn_losses::metrics::watertightness;
 
-use super::surface_patch::InputSurface;
+use super::surface_patch::{InputSurface, crack_triangles};
 use super::{
     CandidateFaces, EdgePredictor, EdgePredictorConfig, ExtendedGraph, FaceClassifier,
     FaceClassifierConfig, FaceGraph, NeighbourSlots, PointSampler, PointSamplerConfig,
@@ -667,7 +668,7 @@ pub const MAX_CRACK_EDGES: usize = 4;
 pub const MAX_WIDE_CRACK_EDGES: usize = 8;
 
 /// Holes of up to this many edges are cracks too where their least-area patch lies along the
-/// input's surface their corners stand for (`InputSurface::lies_along`), in a piece of at
+/// input's surface their corners stand for (`InputSurface::triangles_along`), in a piece of at
 /// least [`MIN_WIDE_CRACK_PIECE_FACES`] faces or on an open input part, beside the input's
 /// border too (docs/mesh_simplifier_model.md, "Longer cracks closed along the surface",
 /// "Cracks beside the border closed along the surface").
@@ -687,9 +688,10 @@ pub const MIN_WIDE_CRACK_PIECE_FACES: usize = 30;
 /// [`voronoi_dual_edges`]): beside the border, not across an opening of the input. A crack no
 /// triangulation of its corners closes gets a centre vertex. Then any hole of at most
 /// [`MAX_SURFACE_CRACK_EDGES`] edges left, beside the border or not, whose least-area patch
-/// lies along the input's surface its corners stand for (`InputSurface::lies_along`), in a
-/// large piece or on an open input part (a small piece of a closed part is rebuilt after
-/// this, `rebuild_small_open_parts`).
+/// lies along the input's surface its corners stand for (`InputSurface::triangles_along`), in
+/// a large piece or on an open input part (a small piece of a closed part is rebuilt after
+/// this, `rebuild_small_open_parts`); where only part of that patch lies along the surface,
+/// that part when the rest is an opening bounded by the input's border (`crack_triangles`).
 fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -> Result<TriMesh> {
     let holes = boundary_loops(selected);
     let mut corners: Vec<u32> = holes.into_iter().flatten().collect();
@@ -743,18 +745,25 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
             .all(|&v| !kept(v) || in_large_piece(v))
             && crack(patch)
     })?;
-    // Any hole left is a crack where its patch lies along the input's surface; a small piece
-    // of a closed part is left whole to the rebuild after this.
+    // Any hole left is a crack where its patch lies along the input's surface; where only part
+    // of it does, that part closes when the rest is an opening of the input (a crack that runs
+    // into the border). A small piece of a closed part is left whole to the rebuild after
+    // this.
     let mut surface = InputSurface::new(input, vertex_map);
     let positions = wide_cracks_closed.vertices();
     let on_open_part = on_open_parts(input, vertex_map);
-    Ok(fill_holes_where(
+    Ok(fill_holes_partly(
         &wide_cracks_closed,
         MAX_SURFACE_CRACK_EDGES,
         |patch| {
-            patch.iter().flatten().all(|&v| {
+            let eligible = patch.iter().flatten().all(|&v| {
                 in_large_piece(v) || on_open_part.get(v as usize).copied().unwrap_or(false)
-            }) && surface.lies_along(patch, positions)
+            });
+            if !eligible {
+                return vec![false; patch.len()];
+            }
+            let on_border = |v: u32| on_input_border.get(v as usize).copied().unwrap_or(false);
+            crack_triangles(patch, surface.triangles_along(patch, positions), on_border)
         },
     )?)
 }

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 
 use meshgnn_geometry::vec3::{cross, dot, norm, sub, to_f64};
 use meshgnn_geometry::{TriMesh, connected_components, geodesic_voronoi_regions, squared_distance};
-use meshgnn_graph::ClosestFace;
+use meshgnn_graph::{ClosestFace, FacePoint};
 
 /// How far from an input face the centroid of a patch triangle may lie, in units of the
 /// triangle's mean edge length. The network's own faces reach 0.30 on a 5 % creature
@@ -60,22 +60,27 @@ impl<'a> InputSurface<'a> {
         }
     }
 
-    /// Whether `patch` (triangles over selected vertices at `positions`) lies along the
-    /// surface of the one input part its corners stand for. For every triangle, the face of
-    /// that part closest to its centroid lies within [`SURFACE_PATCH_TOLERANCE`] and has a
+    /// Which triangles of `patch` (triangles over selected vertices at `positions`) lie along
+    /// the surface of the one input part the patch's corners stand for: the face of that part
+    /// closest to the triangle's centroid lies within [`SURFACE_PATCH_TOLERANCE`] and has a
     /// corner in the geodesic region of one of the patch's corners, and so does a face within
     /// that distance facing the triangle's way ([`SURFACE_PATCH_NORMAL_AGREEMENT`]): on a thin
     /// tube a coarse triangle stands askew to the face closest to it, but the faces around the
-    /// tube face every way. False for a patch with a vertex that stands for none (a centre
-    /// vertex).
-    pub(crate) fn lies_along(&mut self, patch: &[[u32; 3]], positions: &[[f32; 3]]) -> bool {
+    /// tube face every way. None for a patch with a vertex that stands for none (a centre
+    /// vertex) or corners on several parts.
+    pub(crate) fn triangles_along(
+        &mut self,
+        patch: &[[u32; 3]],
+        positions: &[[f32; 3]],
+    ) -> Vec<bool> {
+        let none = vec![false; patch.len()];
         let stands_for = |v: u32| self.vertex_map.get(v as usize).copied();
         let part = |v: u32| stands_for(v).map(|i| self.part_of[i as usize]);
         let Some(first) = patch.first().and_then(|t| part(t[0])) else {
-            return false;
+            return none;
         };
         if !patch.iter().flatten().all(|&v| part(v) == Some(first)) {
-            return false;
+            return none;
         }
         let input = self.input;
         let part_faces = &mut self.part_faces;
@@ -87,7 +92,7 @@ impl<'a> InputSurface<'a> {
             })
             .as_ref()
         else {
-            return false;
+            return none;
         };
         let region = self
             .region
@@ -103,32 +108,84 @@ impl<'a> InputSurface<'a> {
                     .is_some_and(|r| patch.iter().flatten().any(|v| v == r))
             })
         };
-        patch.iter().all(|t| {
-            let corners = t.map(|v| positions[v as usize]);
-            let centroid: [f32; 3] =
-                std::array::from_fn(|k| corners.iter().map(|c| c[k]).sum::<f32>() / 3.0);
-            let mean_edge = (0..3)
-                .map(|i| f64::from(squared_distance(&corners[i], &corners[(i + 1) % 3])).sqrt())
-                .sum::<f64>()
-                / 3.0;
-            let tolerance = SURFACE_PATCH_TOLERANCE * mean_edge;
-            let nearest = closest.query(&centroid, scratch);
-            if nearest.squared_distance > tolerance * tolerance || !stands_for_corner(nearest.face)
-            {
-                return false;
-            }
-            // A triangle without area (along a straight stretch of the rim) faces no way.
-            let Some(normal) = unit_normal(&corners) else {
-                return true;
-            };
-            closest.within(&centroid, tolerance, scratch).any(|hit| {
-                let face =
-                    input.triangles()[hit.face as usize].map(|c| input.vertices()[c as usize]);
-                unit_normal(&face)
-                    .is_some_and(|n| dot(n, normal).abs() >= SURFACE_PATCH_NORMAL_AGREEMENT)
-                    && stands_for_corner(hit.face)
+        patch
+            .iter()
+            .map(|t| {
+                let corners = t.map(|v| positions[v as usize]);
+                let centroid: [f32; 3] =
+                    std::array::from_fn(|k| corners.iter().map(|c| c[k]).sum::<f32>() / 3.0);
+                let mean_edge = (0..3)
+                    .map(|i| f64::from(squared_distance(&corners[i], &corners[(i + 1) % 3])).sqrt())
+                    .sum::<f64>()
+                    / 3.0;
+                let tolerance = SURFACE_PATCH_TOLERANCE * mean_edge;
+                // A triangle without area (along a straight stretch of the rim) faces no way.
+                let normal = unit_normal(&corners);
+                let mut nearest: Option<FacePoint> = None;
+                let mut faces_its_way = normal.is_none();
+                // One search: the faces within reach, the closest among them (the lowest index
+                // among equally close ones, as `ClosestFace::query` picks).
+                for hit in closest.within(&centroid, tolerance, scratch) {
+                    if nearest.is_none_or(|n| {
+                        (hit.squared_distance, hit.face) < (n.squared_distance, n.face)
+                    }) {
+                        nearest = Some(hit);
+                    }
+                    faces_its_way = faces_its_way
+                        || normal.is_some_and(|normal| {
+                            let face = input.triangles()[hit.face as usize]
+                                .map(|c| input.vertices()[c as usize]);
+                            unit_normal(&face).is_some_and(|n| {
+                                dot(n, normal).abs() >= SURFACE_PATCH_NORMAL_AGREEMENT
+                            }) && stands_for_corner(hit.face)
+                        });
+                }
+                faces_its_way && nearest.is_some_and(|n| stands_for_corner(n.face))
             })
-        })
+            .collect()
+    }
+}
+
+/// The triangles of a hole's `patch` to add, given which of them lie `along` the input's
+/// surface ([`InputSurface::triangles_along`]): all when all do; else, for a hole with a corner
+/// off the input's border (`on_border`), those that do when every edge the patch would then
+/// leave open (a rim edge whose triangle is left out, a diagonal with one of its two triangles)
+/// runs between corners standing for the border: a crack that runs into an opening of the
+/// input closes and the opening stays, bounded by the border. Otherwise none: a part of a patch
+/// left beside other open edges (between a teapot's lid and its pot) would stand as a loose
+/// flap, and part of the patch of an opening (all its corners on the border) may fold back
+/// over the surface beside it.
+pub(crate) fn crack_triangles(
+    patch: &[[u32; 3]],
+    along: Vec<bool>,
+    on_border: impl Fn(u32) -> bool,
+) -> Vec<bool> {
+    if along.iter().all(|&a| a) {
+        return along;
+    }
+    // A hole all of whose corners stand for the border is an opening of the input (its patch
+    // may fold back over the surface beside it), not a crack that runs into one.
+    if patch.iter().flatten().all(|&v| on_border(v)) {
+        return vec![false; patch.len()];
+    }
+    // Per undirected patch edge: the triangles holding it, and how many of them are kept.
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    for (t, &kept) in patch.iter().zip(&along) {
+        for i in 0..3 {
+            let (u, w) = (t[i], t[(i + 1) % 3]);
+            let counts = edges.entry((u.min(w), u.max(w))).or_default();
+            counts.0 += 1;
+            counts.1 += u32::from(kept);
+        }
+    }
+    let opening_only = edges.iter().all(|(&(u, w), &(holding, kept))| {
+        let left_open = (holding == 1 && kept == 0) || (holding == 2 && kept == 1);
+        !left_open || (on_border(u) && on_border(w))
+    });
+    if opening_only {
+        along
+    } else {
+        vec![false; patch.len()]
     }
 }
 
@@ -143,7 +200,7 @@ fn unit_normal(t: &[[f32; 3]; 3]) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use meshgnn_geometry::{boundary_loops, fill_holes_where, grid_plane, torus};
+    use meshgnn_geometry::{boundary_loops, fill_holes_partly, grid_plane, torus};
 
     /// `mesh` (a `torus(_, _, _, across)`) less the faces of each cell `(i, j)` that `cut`
     /// names (cell `(i, j)` holds faces `2·(i·across + j)` and the next).
@@ -161,15 +218,116 @@ mod tests {
         TriMesh::new(mesh.vertices().to_vec(), faces).unwrap()
     }
 
-    /// `selected` (every vertex of `input` selected) with each hole whose least-area patch
-    /// lies along `input` filled.
+    /// `selected` (every vertex of `input` selected) with the triangles of each hole's
+    /// least-area patch that lie along `input` added.
     fn filled_along(input: &TriMesh, selected: &TriMesh) -> TriMesh {
         let every: Vec<u32> = (0..input.vertex_count() as u32).collect();
         let mut surface = InputSurface::new(input, &every);
-        fill_holes_where(selected, 32, |patch| {
-            surface.lies_along(patch, selected.vertices())
+        fill_holes_partly(selected, 32, |patch| {
+            surface.triangles_along(patch, selected.vertices())
         })
         .unwrap()
+    }
+
+    /// Whether `p` lies in the xy-projection of one of `mesh`'s faces.
+    fn covered(mesh: &TriMesh, p: [f32; 2]) -> bool {
+        let side = |a: [f32; 3], b: [f32; 3]| {
+            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+        };
+        (0..mesh.face_count()).any(|f| {
+            let [a, b, c] = mesh.triangle_positions(f);
+            let s = [side(a, b), side(b, c), side(c, a)];
+            s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
+        })
+    }
+
+    #[test]
+    fn the_crack_beside_an_opening_closes_and_the_opening_stays() {
+        // A 12 × 12-cell plane with a 2 × 2-cell opening (cells 5-6 × 5-6); the selection also
+        // misses the 2 × 2 cells to its right (7-8 × 5-6): one hole of twelve edges, half
+        // crack, half opening. Its patch as a whole does not lie along the plane; the
+        // triangles over the crack do.
+        let n = 12;
+        let plane = grid_plane(n, n);
+        let cell = |t: &[u32; 3], range_i: std::ops::Range<u32>| {
+            let centroid = |k: usize| {
+                t.iter()
+                    .map(|&v| plane.vertices()[v as usize][k])
+                    .sum::<f32>()
+                    / 3.0
+            };
+            let (i, j) = (
+                (centroid(0) * n as f32) as u32,
+                (centroid(1) * n as f32) as u32,
+            );
+            range_i.contains(&i) && (5..7).contains(&j)
+        };
+        let keep = |range_i: std::ops::Range<u32>| {
+            let faces = plane
+                .triangles()
+                .iter()
+                .filter(|t| !cell(t, range_i.clone()));
+            TriMesh::new(plane.vertices().to_vec(), faces.copied().collect()).unwrap()
+        };
+        let (input, selected) = (keep(5..7), keep(5..9));
+        let hole: Vec<usize> = boundary_loops(&selected).iter().map(Vec::len).collect();
+        assert_eq!(hole, vec![48, 12]);
+        let every: Vec<u32> = (0..input.vertex_count() as u32).collect();
+        let mut surface = InputSurface::new(&input, &every);
+        let border: Vec<u32> = boundary_loops(&input).concat();
+        let mut whole_patch_along = None;
+        let filled = fill_holes_partly(&selected, 12, |patch| {
+            let along = surface.triangles_along(patch, selected.vertices());
+            whole_patch_along = Some(along.iter().all(|&a| a));
+            crack_triangles(patch, along, |v| border.contains(&v))
+        })
+        .unwrap();
+        assert_eq!(whole_patch_along, Some(false));
+        let unit = |x: f32| x / n as f32;
+        assert!(!covered(&selected, [unit(8.0), unit(6.0)]));
+        assert!(
+            covered(&filled, [unit(8.0), unit(6.0)]),
+            "the crack's centre"
+        );
+        assert!(
+            !covered(&filled, [unit(6.0), unit(6.0)]),
+            "the opening's centre"
+        );
+    }
+
+    #[test]
+    fn part_of_a_patch_is_added_only_when_what_stays_open_runs_along_the_border() {
+        // The square a-b-c-d as two triangles over the diagonal (a, c).
+        let [a, b, c, d] = [0, 1, 2, 3];
+        let patch = [[a, b, c], [a, c, d]];
+        let border_at = |on: Vec<u32>| move |v: u32| on.contains(&v);
+        // Both lie along: both, whatever the border.
+        assert_eq!(
+            crack_triangles(&patch, vec![true; 2], border_at(vec![])),
+            [true, true]
+        );
+        // The first only: (c, d), (d, a) and the diagonal (a, c) stay open. On the border
+        // they bound an opening and the first triangle closes the crack beside it.
+        let first = vec![true, false];
+        assert_eq!(
+            crack_triangles(&patch, first.clone(), border_at(vec![a, c, d])),
+            [true, false]
+        );
+        // With d off the border the triangle would stand beside open surface: none.
+        assert_eq!(
+            crack_triangles(&patch, first, border_at(vec![a, b, c])),
+            [false, false]
+        );
+        // Every corner on the border: an opening of the input, not a crack; none.
+        assert_eq!(
+            crack_triangles(&patch, vec![true, false], border_at(vec![a, b, c, d])),
+            [false, false]
+        );
+        // Neither lies along: none.
+        assert_eq!(
+            crack_triangles(&patch, vec![false; 2], border_at(vec![a, b, c, d])),
+            [false, false]
+        );
     }
 
     #[test]
@@ -252,10 +410,11 @@ mod tests {
         let every: Vec<u32> = (0..2 * count).collect();
         let across = [at(5, 5), at(7, 5), at(7, 6)];
         let mut surface = InputSurface::new(&input, &every);
-        assert!(!surface.lies_along(&[across], &vertices));
+        assert_eq!(surface.triangles_along(&[across], &vertices), [false]);
         // Without the lid the plane's faces around the opening are the closest and it does.
         let open_pot = TriMesh::new(vertices.clone(), pot.collect()).unwrap();
-        assert!(InputSurface::new(&open_pot, &every).lies_along(&[across], &vertices));
+        let mut surface = InputSurface::new(&open_pot, &every);
+        assert_eq!(surface.triangles_along(&[across], &vertices), [true]);
     }
 
     #[test]
@@ -264,7 +423,10 @@ mod tests {
         let every: Vec<u32> = (0..ring.vertex_count() as u32).collect();
         let mut surface = InputSurface::new(&ring, &every);
         let mut positions = ring.vertices().to_vec();
-        assert!(surface.lies_along(&[ring.triangles()[0]], &positions));
+        assert_eq!(
+            surface.triangles_along(&[ring.triangles()[0]], &positions),
+            [true]
+        );
         // A centre vertex, past the selected ones, at the face's centroid.
         let [a, b, c] = ring.triangles()[0];
         let centroid = std::array::from_fn(|k| {
@@ -276,6 +438,9 @@ mod tests {
         });
         positions.push(centroid);
         let centre = every.len() as u32;
-        assert!(!surface.lies_along(&[[a, b, centre]], &positions));
+        assert_eq!(
+            surface.triangles_along(&[[a, b, centre]], &positions),
+            [false]
+        );
     }
 }
