@@ -146,7 +146,9 @@ impl<'a> ClosestFace<'a> {
     /// // Beside the diagonal both faces are near; a point off the lower right corner is near
     /// // only the face holding it.
     /// assert_eq!(closest.within(&[0.5, 0.5, 0.1], 0.2, &mut scratch).count(), 2);
-    /// let near: Vec<u32> = closest.within(&[1.2, -0.1, 0.0], 0.3, &mut scratch).map(|h| h.face).collect();
+    /// let off_corner = [1.2, -0.1, 0.0];
+    /// let near: Vec<u32> =
+    ///     closest.within(&off_corner, 0.3, &mut scratch).map(|h| h.face).collect();
     /// assert_eq!(near, vec![0]);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
