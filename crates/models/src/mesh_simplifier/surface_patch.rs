@@ -4,7 +4,8 @@
 //! patch triangle the input has faces, standing for the hole's corners, one of them facing the
 //! triangle's way. A patch across an opening has none: the faces under a pot's opening are a
 //! lid's, which other selected vertices stand for, and beside a cap across a thin part's open
-//! end the input's faces stand across the cap.
+//! end the input's faces stand across the cap. Where a crack runs into an opening, the
+//! triangles over the crack are added and the opening stays ([`crack_triangles`]).
 
 use std::collections::HashMap;
 
