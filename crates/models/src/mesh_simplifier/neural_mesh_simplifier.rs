@@ -22,7 +22,7 @@
 //! [`voronoi_dual_edges`], with a centre vertex where no triangulation of a crack's corners
 //! fits), and of [`MAX_SURFACE_CRACK_EDGES`] where the patch lies along the input's surface
 //! its corners stand for (in a large piece or on an open input part, beside the border
-//! too), rebuilds each small closed part still left open as QEM connects its
+//! too; in part where a crack runs into an opening of the input), rebuilds each small closed part still left open as QEM connects its
 //! kept vertices ([`rebuild_small_open_parts`] with `qem_connected_part`, beyond the thesis),
 //! drops the faces hanging from a closed piece of a closed input part ([`remove_flaps`]),
 //! closes each face no other face touches into a tetrahedron over the input behind it
@@ -751,11 +751,13 @@ fn fill_cracks_inside(input: &TriMesh, vertex_map: &[u32], selected: &TriMesh) -
     // this.
     let mut surface = InputSurface::new(input, vertex_map);
     let positions = wide_cracks_closed.vertices();
-    let on_open_part = on_open_parts(input, vertex_map);
+    // Computed at the first patch: often every hole is closed before this stage.
+    let mut on_open_part: Option<Vec<bool>> = None;
     Ok(fill_holes_partly(
         &wide_cracks_closed,
         MAX_SURFACE_CRACK_EDGES,
         |patch| {
+            let on_open_part = on_open_part.get_or_insert_with(|| on_open_parts(input, vertex_map));
             let eligible = patch.iter().flatten().all(|&v| {
                 in_large_piece(v) || on_open_part.get(v as usize).copied().unwrap_or(false)
             });

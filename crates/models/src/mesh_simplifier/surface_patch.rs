@@ -33,8 +33,9 @@ pub(crate) struct InputSurface<'a> {
     input: &'a TriMesh,
     /// `vertex_map[i]`: the input vertex selected vertex `i` stands for.
     vertex_map: &'a [u32],
-    part_of: Vec<u32>,
-    part_faces: Vec<Vec<u32>>,
+    /// Each input vertex's part and each part's faces ([`faces_per_part`]); computed at the
+    /// first patch.
+    parts: Option<(Vec<u32>, Vec<Vec<u32>>)>,
     indexed: HashMap<u32, Option<ClosestFace<'a>>>,
     /// The selected vertex whose geodesic region holds each input vertex; computed at the
     /// first patch.
@@ -45,16 +46,10 @@ pub(crate) struct InputSurface<'a> {
 impl<'a> InputSurface<'a> {
     /// Nothing is indexed until a patch is judged.
     pub(crate) fn new(input: &'a TriMesh, vertex_map: &'a [u32]) -> Self {
-        let (parts, part_of) = connected_components(input);
-        let mut part_faces = vec![Vec::new(); parts];
-        for (f, t) in input.triangles().iter().enumerate() {
-            part_faces[part_of[t[0] as usize] as usize].push(f as u32);
-        }
         Self {
             input,
             vertex_map,
-            part_of,
-            part_faces,
+            parts: None,
             indexed: HashMap::new(),
             region: None,
             scratch: Vec::new(),
@@ -75,16 +70,16 @@ impl<'a> InputSurface<'a> {
         positions: &[[f32; 3]],
     ) -> Vec<bool> {
         let none = vec![false; patch.len()];
+        let input = self.input;
+        let (part_of, part_faces) = self.parts.get_or_insert_with(|| faces_per_part(input));
         let stands_for = |v: u32| self.vertex_map.get(v as usize).copied();
-        let part = |v: u32| stands_for(v).map(|i| self.part_of[i as usize]);
+        let part = |v: u32| stands_for(v).map(|i| part_of[i as usize]);
         let Some(first) = patch.first().and_then(|t| part(t[0])) else {
             return none;
         };
         if !patch.iter().flatten().all(|&v| part(v) == Some(first)) {
             return none;
         }
-        let input = self.input;
-        let part_faces = &mut self.part_faces;
         let Some(closest) = self
             .indexed
             .entry(first)
@@ -145,6 +140,16 @@ impl<'a> InputSurface<'a> {
             })
             .collect()
     }
+}
+
+/// Each vertex's part (vertices joined by faces) and each part's faces.
+fn faces_per_part(input: &TriMesh) -> (Vec<u32>, Vec<Vec<u32>>) {
+    let (parts, part_of) = connected_components(input);
+    let mut part_faces = vec![Vec::new(); parts];
+    for (f, t) in input.triangles().iter().enumerate() {
+        part_faces[part_of[t[0] as usize] as usize].push(f as u32);
+    }
+    (part_of, part_faces)
 }
 
 /// The triangles of a hole's `patch` to add, given which of them lie `along` the input's
