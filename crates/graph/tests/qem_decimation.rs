@@ -271,7 +271,13 @@ fn triangle_soup_is_welded() {
 
 #[test]
 fn attributes_are_carried_through_collapses() {
-    let grid = grid_plane(12, 12);
+    // The second grid (105 800 faces) is decimated as two halves joined after.
+    for (cells, ratio) in [(12, 0.1), (230, 0.02)] {
+        attributes_are_carried_through_collapses_of(grid_plane(cells, cells), ratio);
+    }
+}
+
+fn attributes_are_carried_through_collapses_of(grid: TriMesh, ratio: f64) {
     let uvs: Vec<[f32; 2]> = grid.vertices().iter().map(|p| [p[0], p[1]]).collect();
     let colors: Vec<[f32; 3]> = grid.vertices().iter().map(|p| [p[0], p[1], 0.5]).collect();
     let normals = vec![[0.0, 0.0, 1.0]; grid.vertex_count()];
@@ -282,8 +288,8 @@ fn attributes_are_carried_through_collapses() {
         .unwrap()
         .with_normals(normals)
         .unwrap();
-    let out = decimate(&mesh, &options(Target::Ratio(0.1))).unwrap();
-    assert!(out.mesh.face_count() < 40);
+    let out = decimate(&mesh, &options(Target::Ratio(ratio))).unwrap();
+    assert!(out.mesh.face_count() as f64 <= (ratio * mesh.face_count() as f64).ceil());
     let (v, uv, col, nor) = (
         out.mesh.vertices(),
         out.mesh.uvs().unwrap(),
@@ -464,6 +470,21 @@ fn keep_original_positions_places_vertices_on_inputs() {
     assert_closed_manifold(&out.mesh);
 }
 
+/// Every vertex of `keep` is an output vertex of its own, at its input position.
+fn assert_kept_in_place(mesh: &TriMesh, out: &Decimation, keep: &[u32]) {
+    let mut outputs: Vec<u32> = keep.iter().map(|&v| out.vertex_map[v as usize]).collect();
+    for (&v, &o) in keep.iter().zip(&outputs) {
+        assert_eq!(out.mesh.vertices()[o as usize], mesh.vertices()[v as usize]);
+    }
+    outputs.sort_unstable();
+    outputs.dedup();
+    assert_eq!(
+        outputs.len(),
+        keep.len(),
+        "a kept vertex was removed or merged"
+    );
+}
+
 #[test]
 fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
     let mesh = noisy_sphere(3, 0.05); // 642 vertices
@@ -475,13 +496,7 @@ fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
         ..Default::default()
     };
     let out = decimate_keeping(&mesh, &collapse_all, &keep, &mut |_| {}).unwrap();
-    let mut outputs: Vec<u32> = keep.iter().map(|&v| out.vertex_map[v as usize]).collect();
-    for (&v, &o) in keep.iter().zip(&outputs) {
-        assert_eq!(out.mesh.vertices()[o as usize], mesh.vertices()[v as usize]);
-    }
-    outputs.sort_unstable();
-    outputs.dedup();
-    assert_eq!(outputs.len(), keep.len(), "two kept vertices merged");
+    assert_kept_in_place(&mesh, &out, &keep);
     // Nearly every other vertex goes (a few are held by the manifold and flip checks).
     let others = out.mesh.vertex_count() - keep.len();
     assert!(
@@ -495,6 +510,33 @@ fn kept_vertices_survive_in_place_and_the_rest_collapses_onto_them() {
     let free = decimate(&mesh, &collapse_all).unwrap();
     assert!(free.mesh.vertex_count() < keep.len());
     assert!(decimate_keeping(&mesh, &options(Target::Ratio(0.5)), &[642], &mut |_| {}).is_err());
+}
+
+#[test]
+fn kept_vertices_beside_a_border_or_a_non_manifold_edge_stay() {
+    // A kept interior vertex next to a border vertex: the border rule (an interior vertex
+    // collapses onto the border) must not remove it; the edge between them stays instead.
+    let grid = grid_plane(8, 8); // 81 vertices, row-major, 9 per row
+    let ring: Vec<u32> = (1..8)
+        .flat_map(|j| [9 * j + 1, 9 * j + 7])
+        .chain((2..7).flat_map(|i| [9 + i, 63 + i]))
+        .collect();
+    // The same beside the spine of a book of three pages (vertices on a non-manifold edge).
+    let book = book_of_three_pages();
+    let spine_neighbours: Vec<u32> = (0..book.vertex_count() as u32)
+        .filter(|&v| {
+            let p = book.vertices()[v as usize];
+            p[0] != 0.0 || p[1] != 0.0
+        })
+        .collect();
+    for (mesh, keep) in [(grid, ring), (book, spine_neighbours)] {
+        let collapse_all = DecimationOptions {
+            target: Target::Faces(1),
+            ..Default::default()
+        };
+        let out = decimate_keeping(&mesh, &collapse_all, &keep, &mut |_| {}).unwrap();
+        assert_kept_in_place(&mesh, &out, &keep);
+    }
 }
 
 #[test]

@@ -156,13 +156,21 @@ pub(crate) struct Collapser {
     pub max_error: f64,
     pub collapses: usize,
     pub keep_original_positions: bool,
+    /// The input's face and vertex counts, for [`Decimation`].
+    input_size: (usize, usize),
 }
 
 impl Collapser {
     /// Welds `mesh`, builds the incidence lists, quadrics (area-weighted face planes plus
-    /// boundary planes), region normals, flags (the input vertices `keep` kept) and the list
+    /// boundary planes, or the sums of `given` per welded vertex: the quadrics of a mesh
+    /// decimated before), region normals, flags (the input vertices `keep` kept) and the list
     /// of collapsible edges.
-    pub(crate) fn new(mesh: &TriMesh, options: &DecimationOptions, keep: &[u32]) -> Result<Self> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        options: &DecimationOptions,
+        keep: &[u32],
+        given: Option<&[Quadric]>,
+    ) -> Result<Self> {
         if let Some(&v) = keep.iter().find(|&&v| v as usize >= mesh.vertex_count()) {
             return Err(Error::InvalidParameter {
                 name: "keep",
@@ -382,6 +390,12 @@ impl Collapser {
                 verts[t as usize].meta |= KEPT;
             }
         }
+        if let Some(given) = given {
+            quadrics.fill(Quadric::default());
+            for (&w, &q) in welding.map.iter().zip(given) {
+                quadrics[w as usize] += q;
+            }
+        }
         let edges = chunks.into_iter().map(|(edges, _)| edges).collect();
 
         let live_faces = faces.len() - repeats.len();
@@ -404,6 +418,7 @@ impl Collapser {
             max_error: 0.0,
             collapses: 0,
             keep_original_positions: options.keep_original_positions,
+            input_size: (mesh.face_count(), mesh.vertex_count()),
         })
     }
 
@@ -531,7 +546,17 @@ impl Collapser {
     }
 
     /// Builds the output mesh and the vertex map.
-    pub(crate) fn finish(self, mesh: &TriMesh, stop_reason: StopReason) -> Result<Decimation> {
+    /// The quadrics of the vertices left, in the output's order (that of [`Self::finish`]).
+    pub(crate) fn survivor_quadrics(&self) -> Vec<Quadric> {
+        self.verts
+            .iter()
+            .zip(&self.quadrics)
+            .filter(|(v, _)| v.alive())
+            .map(|(_, &q)| q)
+            .collect()
+    }
+
+    pub(crate) fn finish(self, stop_reason: StopReason) -> Result<Decimation> {
         let n = self.verts.len();
         let alive = |v: usize| self.verts[v].alive();
         let mut new_index = vec![u32::MAX; n];
@@ -594,8 +619,8 @@ impl Collapser {
             max_cost: self.max_cost,
             welded: self.welded,
             stop_reason,
-            input_faces: mesh.face_count(),
-            input_vertices: mesh.vertex_count(),
+            input_faces: self.input_size.0,
+            input_vertices: self.input_size.1,
             collapses: self.collapses,
         })
     }

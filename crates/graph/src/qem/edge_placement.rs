@@ -16,16 +16,15 @@ impl Collapser {
     /// boundary edge collapses onto the boundary vertex and a boundary edge to the best point
     /// of its segment.
     /// Non-manifold edges keep their vertices: an edge to a pinned vertex collapses onto it,
-    /// and one along a non-manifold edge or a seam onto one of its ends. Every
+    /// and one along a non-manifold edge or a seam onto one of its ends. An edge whose ends
+    /// must both stay by these rules (a kept vertex beside a border or pinned one) is never
+    /// collapsed. Every
     /// candidate position is rounded to `f32` (the output precision) before it is scored, so
     /// the cost and the validity checks see exactly the position that is written.
     pub(crate) fn placement(&self, a: u32, b: u32) -> Option<Placement> {
         let (ia, ib) = (a as usize, b as usize);
         let (va, vb) = (self.verts[ia], self.verts[ib]);
         let (ka, kb) = (va.kept(), vb.kept());
-        if ka && kb {
-            return None;
-        }
         let (la, lb) = (va.locked(), vb.locked());
         let (pin_a, pin_b) = (la || va.non_manifold(), lb || vb.non_manifold());
         if la && lb {
@@ -56,10 +55,14 @@ impl Collapser {
             }
         };
         let (ba, bb) = (va.boundary(), vb.boundary());
+        let a_stays = ka || (la && !lb) || (pin_a && !pin_b) || (ba && !bb && !pin_b);
+        let b_stays = kb || (lb && !la) || (pin_b && !pin_a) || (bb && !ba && !pin_a);
         let at = |t: f64| std::array::from_fn(|i| pa[i] + t * (pb[i] - pa[i]));
-        if ka || (la && !lb) || (pin_a && !pin_b) || (ba && !bb && !pin_b) {
+        if a_stays && b_stays {
+            return None;
+        } else if a_stays {
             consider(pa, a, 0.0);
-        } else if kb || (lb && !la) || (pin_b && !pin_a) || (bb && !ba && !pin_a) {
+        } else if b_stays {
             consider(pb, b, 1.0);
         } else if self.keep_original_positions || (pin_a && pin_b) {
             consider(pa, a, 0.0);

@@ -8,8 +8,8 @@
 //! ([`region_quadric_placement`]), and the QEM connectivity of chosen vertices
 //! ([`kept_vertex_connectivity`]). The other files
 //! are the decimation's parts: welding, vertex records and collapses, edge placement,
-//! validity checks, candidate sorting, speculative parallel checks, memory warm-up and the
-//! changed-vertex sets.
+//! validity checks, candidate sorting, speculative parallel checks, memory warm-up, the
+//! changed-vertex sets and the split of large meshes into two halves decimated at once.
 
 mod candidates;
 mod collapse_checks;
@@ -23,6 +23,7 @@ mod quadric;
 mod region_placement;
 mod seed_exchange;
 mod seed_regions;
+mod spatial_halves;
 mod speculation;
 mod vertex_bits;
 mod vertex_selection;

@@ -182,7 +182,7 @@ mod tests {
     /// The collapser of a noisy sphere and every initial edge as a candidate batch.
     fn noisy_sphere_with_every_edge() -> (Collapser, Vec<Candidate>) {
         let mesh = noisy_sphere(3, 0.08);
-        let mut state = Collapser::new(&mesh, &DecimationOptions::default(), &[]).unwrap();
+        let mut state = Collapser::new(&mesh, &DecimationOptions::default(), &[], None).unwrap();
         let batch = std::mem::take(&mut state.initial_edges)
             .into_iter()
             .flatten()
