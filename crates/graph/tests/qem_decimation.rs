@@ -271,7 +271,7 @@ fn triangle_soup_is_welded() {
 
 #[test]
 fn attributes_are_carried_through_collapses() {
-    // The second grid (105 800 faces) is decimated as two halves joined after.
+    // The second grid (105 800 faces) is decimated as blocks joined after.
     for (cells, ratio) in [(12, 0.1), (230, 0.02)] {
         attributes_are_carried_through_collapses_of(grid_plane(cells, cells), ratio);
     }

@@ -272,10 +272,10 @@ impl Collapser {
         }
         let live = |f: &&u32| faces[**f as usize][0] != DEAD;
 
-        // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics, and
-        // the vertex record with the sum of the face area normals (flags follow below).
-        // (Face planes are recomputed per incident vertex rather than stored: 3× the
-        // arithmetic, but no per-face array at the memory peak.)
+        // Per vertex, in CSR order (deterministic): the area-weighted face plane quadrics
+        // (unless `given`), and the vertex record with the sum of the face area normals (flags
+        // follow below). (Face planes are recomputed per incident vertex rather than stored:
+        // 3× the arithmetic, but no per-face array at the memory peak.)
         let corner_normal = |[p0, p1, p2]: [[f64; 3]; 3]| (cross(sub(p1, p0), sub(p2, p0)), p0);
         let (mut quadrics, mut verts): (Vec<Quadric>, Vec<VertexRecord>) = (0..n)
             .into_par_iter()
@@ -287,9 +287,14 @@ impl Collapser {
                     .fold((Quadric::default(), [0.0; 3]), |(q, s), &f| {
                         let corners = faces[f as usize].map(|u| positions[u as usize]);
                         let (normal, point) = corner_normal(corners);
-                        let plane =
-                            Quadric::from_plane(normal, point, 0.5 * dot(normal, normal).sqrt());
-                        (q + plane, std::array::from_fn(|k| s[k] + normal[k]))
+                        let q = match given {
+                            Some(_) => q,
+                            None => {
+                                let area = 0.5 * dot(normal, normal).sqrt();
+                                q + Quadric::from_plane(normal, point, area)
+                            }
+                        };
+                        (q, std::array::from_fn(|k| s[k] + normal[k]))
                     });
                 let record = VertexRecord {
                     position: positions[v].map(|x| x as f32),
@@ -348,8 +353,12 @@ impl Collapser {
             .collect();
         // A seam vertex stands for the whole surface around its position: the face planes of
         // its twins' charts join its quadric (equal for all twins, and kept equal since twins
-        // collapse together).
-        if welding.seam.contains(&true) {
+        // collapse together). Quadrics `given` are summed over each welded vertex instead.
+        if let Some(given) = given {
+            for (&w, &q) in welding.map.iter().zip(given) {
+                quadrics[w as usize] += q;
+            }
+        } else if welding.seam.contains(&true) {
             let own = quadrics.clone();
             for v in (0..n).filter(|&v| welding.seam[v]) {
                 for t in twins_of(&welding.twin, v as u32) {
@@ -362,8 +371,9 @@ impl Collapser {
             if count == 1 {
                 flags.push((a, BOUNDARY));
                 flags.push((b, BOUNDARY));
-                // A seam is no border of the surface: no border plane along it.
-                if welding.seam[a as usize] && welding.seam[b as usize] {
+                // A seam is no border of the surface: no border plane along it. Quadrics
+                // `given` hold their border planes already.
+                if given.is_some() || (welding.seam[a as usize] && welding.seam[b as usize]) {
                     continue;
                 }
                 let (normal, _) = corner_normal(faces[f as usize].map(position));
@@ -388,12 +398,6 @@ impl Collapser {
             let w = welding.map[v as usize];
             for t in std::iter::once(w).chain(twins_of(&welding.twin, w)) {
                 verts[t as usize].meta |= KEPT;
-            }
-        }
-        if let Some(given) = given {
-            quadrics.fill(Quadric::default());
-            for (&w, &q) in welding.map.iter().zip(given) {
-                quadrics[w as usize] += q;
             }
         }
         let edges = chunks.into_iter().map(|(edges, _)| edges).collect();

@@ -9,7 +9,7 @@
 //! ([`kept_vertex_connectivity`]). The other files
 //! are the decimation's parts: welding, vertex records and collapses, edge placement,
 //! validity checks, candidate sorting, speculative parallel checks, memory warm-up, the
-//! changed-vertex sets and the split of large meshes into two halves decimated at once.
+//! changed-vertex sets and the split of large meshes into blocks decimated at once.
 
 mod candidates;
 mod collapse_checks;
@@ -23,7 +23,7 @@ mod quadric;
 mod region_placement;
 mod seed_exchange;
 mod seed_regions;
-mod spatial_halves;
+mod spatial_blocks;
 mod speculation;
 mod vertex_bits;
 mod vertex_selection;
