@@ -259,29 +259,50 @@ pub fn decimate_keeping(
         [] => decimate_in_blocks(mesh, options, target, progress),
         _ => None,
     };
-    blocks.unwrap_or_else(|| {
-        decimate_whole(Cow::Borrowed(mesh), options, keep, None, progress)
-            .map(|(decimation, _)| decimation)
-    })
+    blocks.unwrap_or_else(|| decimate_whole(Cow::Borrowed(mesh), options, keep, None, progress))
 }
 
 /// [`decimate_keeping`] in one collapse loop over the whole mesh, from the quadrics `given`
-/// per input vertex (else those of its faces and borders); with the quadrics of the vertices
-/// left, in output order. A mesh given owned is freed once the loop's state holds its data.
+/// per input vertex (else those of its faces and borders). A mesh given owned is freed once
+/// the loop's state holds its data.
 pub(super) fn decimate_whole(
     mesh: Cow<'_, TriMesh>,
     options: &DecimationOptions,
     keep: &[u32],
     given: Option<&[Quadric]>,
     progress: &mut dyn FnMut(f64),
+) -> Result<Decimation> {
+    let (state, stop_reason) = collapse_whole(mesh, options, keep, given, progress)?;
+    state.finish(stop_reason)
+}
+
+/// [`decimate_whole`], with the quadrics of the vertices left, in output order: what a later
+/// pass over the output starts from.
+pub(super) fn decimate_whole_with_quadrics(
+    mesh: Cow<'_, TriMesh>,
+    options: &DecimationOptions,
+    keep: &[u32],
+    progress: &mut dyn FnMut(f64),
 ) -> Result<(Decimation, Vec<Quadric>)> {
+    let (state, stop_reason) = collapse_whole(mesh, options, keep, None, progress)?;
+    let quadrics = state.survivor_quadrics();
+    Ok((state.finish(stop_reason)?, quadrics))
+}
+
+/// The collapse loop of [`decimate_whole`], up to the output.
+fn collapse_whole(
+    mesh: Cow<'_, TriMesh>,
+    options: &DecimationOptions,
+    keep: &[u32],
+    given: Option<&[Quadric]>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Collapser, StopReason)> {
     let target = validate(&mesh, options)?;
     let mut state = Collapser::new(&mesh, options, keep, given)?;
     drop(mesh);
     let stop_reason = run(&mut state, target, options, progress);
     progress(1.0);
-    let quadrics = state.survivor_quadrics();
-    Ok((state.finish(stop_reason)?, quadrics))
+    Ok((state, stop_reason))
 }
 
 /// Checks the options and returns the target face count.

@@ -24,7 +24,9 @@ use std::sync::mpsc;
 use meshgnn_geometry::TriMesh;
 use rayon::prelude::*;
 
-use super::decimation::{Decimation, DecimationOptions, Target, decimate_whole};
+use super::decimation::{
+    Decimation, DecimationOptions, Target, decimate_whole, decimate_whole_with_quadrics,
+};
 use super::quadric::Quadric;
 use crate::error::Result;
 
@@ -284,7 +286,7 @@ fn decimate_blocks(
         target: Target::Faces(target),
         ..*options
     };
-    let (last, _) = decimate_whole(
+    let last = decimate_whole(
         Cow::Owned(joined.mesh),
         &whole,
         &[],
@@ -333,7 +335,7 @@ fn decimate_each(
             ..*options
         };
         let (decimation, quadrics) =
-            decimate_whole(Cow::Owned(mesh), &block_options, &keep, None, report)?;
+            decimate_whole_with_quadrics(Cow::Owned(mesh), &block_options, &keep, report)?;
         Ok(DecimatedBlock {
             decimation,
             quadrics,
@@ -571,7 +573,7 @@ mod tests {
             let blocks = decimate_in_blocks(&ball, &options(target), target, &mut |_| {})
                 .expect("large enough to split")
                 .unwrap();
-            let (whole, _) = decimate_whole(
+            let whole = decimate_whole(
                 Cow::Borrowed(&ball),
                 &options(target),
                 &[],
