@@ -272,19 +272,22 @@ pub(super) fn decimate_whole(
     given: Option<&[Quadric]>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Decimation> {
-    let (state, stop_reason) = collapse_whole(mesh, options, keep, given, progress)?;
+    let (state, stop_reason) = collapse_whole(mesh, options, keep, given, None, progress)?;
     state.finish(stop_reason)
 }
 
 /// [`decimate_whole`], with the quadrics of the vertices left, in output order: what a later
-/// pass over the output starts from.
+/// pass over the output starts from. No collapse costing more than `cost_cap` (in the
+/// priority's units, [`Decimation::max_cost`]) is made: the loop stops short of the target
+/// there.
 pub(super) fn decimate_whole_with_quadrics(
     mesh: Cow<'_, TriMesh>,
     options: &DecimationOptions,
     keep: &[u32],
+    cost_cap: Option<f64>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Decimation, Vec<Quadric>)> {
-    let (state, stop_reason) = collapse_whole(mesh, options, keep, None, progress)?;
+    let (state, stop_reason) = collapse_whole(mesh, options, keep, None, cost_cap, progress)?;
     let quadrics = state.survivor_quadrics();
     Ok((state.finish(stop_reason)?, quadrics))
 }
@@ -295,12 +298,13 @@ fn collapse_whole(
     options: &DecimationOptions,
     keep: &[u32],
     given: Option<&[Quadric]>,
+    cost_cap: Option<f64>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Collapser, StopReason)> {
     let target = validate(&mesh, options)?;
     let mut state = Collapser::new(&mesh, options, keep, given)?;
     drop(mesh);
-    let stop_reason = run(&mut state, target, options, progress);
+    let stop_reason = run(&mut state, target, options, cost_cap, progress);
     progress(1.0);
     Ok((state, stop_reason))
 }
@@ -350,14 +354,17 @@ fn batch_size(live_faces: usize, threads: usize) -> usize {
     (live_faces / 256).clamp(64, most)
 }
 
-/// The collapse passes over `state`; returns why they stopped.
+/// The collapse passes over `state`, none costing more than `cost_cap`; returns why they
+/// stopped.
 fn run(
     state: &mut Collapser,
     target: usize,
     options: &DecimationOptions,
+    cost_cap: Option<f64>,
     progress: &mut dyn FnMut(f64),
 ) -> StopReason {
     let max_error2 = options.max_error.map(|e| e * e);
+    let cap = cost_cap.map_or(u32::MAX, cost_key);
     let initial = state.live_faces;
     let to_remove = initial.saturating_sub(target).max(1) as f64;
     let mut bounded = true;
@@ -377,11 +384,9 @@ fn run(
             Some(c) if bounded => Some(cost_key(PASS_COST_SLACK * key_cost(c.key))),
             _ => None,
         };
-        // Candidates beyond the cost bound are never tried.
-        let usable = match limit {
-            Some(l) => candidates.partition_point(|c| c.key <= l),
-            None => candidates.len(),
-        };
+        // Candidates beyond the cost bound or the cap are never tried.
+        let bound = limit.map_or(cap, |l| l.min(cap));
+        let usable = candidates.partition_point(|c| c.key <= bound);
         let collapses_before = state.collapses;
         let mut start = 0;
         while start < usable && state.live_faces > target {
@@ -419,9 +424,10 @@ fn run(
             bounded = true;
         }
     }
+    let capped = candidates.last().is_some_and(|c| c.key > cap);
     if state.live_faces <= target {
         StopReason::TargetReached
-    } else if loop_state.rejected_for_error {
+    } else if loop_state.rejected_for_error || capped {
         StopReason::MaxError
     } else {
         StopReason::NoValidCollapse
