@@ -207,8 +207,9 @@ impl Collapser {
                     })
                 };
                 let region = around(merged_region);
-                let cos_new = dot(region, n_new) / (dot(region, region) * len_new2).sqrt();
-                if cos_new < MIN_REGION_COS {
+                let norms = (dot(region, region) * len_new2).sqrt();
+                if dot(region, n_new) < MIN_REGION_COS * norms {
+                    let cos_new = dot(region, n_new) / norms;
                     let region_old = around(self.verts[moving as usize].region_normal);
                     let cos_old =
                         dot(region_old, n_old) / (dot(region_old, region_old) * len_old2).sqrt();
