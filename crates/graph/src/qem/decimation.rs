@@ -527,11 +527,22 @@ fn collapse_batch(
             let survivor = placement.survivor;
             let removed = if survivor == a { b } else { a };
             state.collapse(a, b, placement);
-            touched.push(survivor);
-            for v in [survivor, removed] {
-                changed.insert(v);
-                batch_changed.insert(v);
-                batch_list.push(v);
+            // Done for this pass; the survivor and the neighbours whose flags changed are
+            // re-scored for the next.
+            let mut mark = |v: u32, rescore: bool| {
+                if !changed.contains(v) {
+                    if rescore {
+                        touched.push(v);
+                    }
+                    changed.insert(v);
+                    batch_changed.insert(v);
+                    batch_list.push(v);
+                }
+            };
+            mark(survivor, true);
+            mark(removed, false);
+            for &v in state.refreshed() {
+                mark(v, true);
             }
         }
     }
