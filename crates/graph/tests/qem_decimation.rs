@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use meshgnn_geometry::{TriMesh, grid_plane, icosphere, subdivided_cube};
+use meshgnn_geometry::{TriMesh, grid_plane, icosphere, subdivided_cube, torus};
 use meshgnn_graph::{
     Decimation, DecimationOptions, Error, StopReason, Target, decimate, decimate_keeping,
 };
@@ -246,6 +246,64 @@ fn folded_input_faces_do_not_freeze_their_neighbourhood() {
         assert_eq!(out.stop_reason, StopReason::TargetReached, "ratio {ratio}");
         assert!((out.mesh.face_count() as f64 - target).abs() <= 0.01 * target + 1.0);
         assert_closed_manifold(&out.mesh);
+    }
+}
+
+/// Decimates `mesh` to 1 % and checks that it gets there and stays closed.
+fn thin_part_reaches_one_percent(name: &str, mesh: &TriMesh) -> Decimation {
+    let out = decimate(mesh, &options(Target::Ratio(0.01))).unwrap();
+    let target = (0.01 * mesh.face_count() as f64).round();
+    assert!(
+        out.mesh.face_count() as f64 <= 1.01 * target,
+        "{name}: {} faces for {target} ({:?})",
+        out.mesh.face_count(),
+        out.stop_reason
+    );
+    let (boundary, non_manifold, misoriented) = edge_defects(&out.mesh);
+    assert_eq!((boundary, non_manifold, misoriented), (0, 0, 0), "{name}");
+    out
+}
+
+#[test]
+fn a_thin_plate_reaches_one_percent() {
+    // A 2 × 2 × 0.005 box: at 1 % its rim's faces stand edge-on to their corners' surface (the
+    // top or the bottom), and moving them was refused (stopped at 112 faces for 31).
+    let cube = subdivided_cube(16);
+    let flattened = cube
+        .vertices()
+        .iter()
+        .map(|&[x, y, z]| [x, y, 0.0025 * z])
+        .collect();
+    let plate = cube.with_vertices(flattened).unwrap();
+    let out = thin_part_reaches_one_percent("plate", &plate);
+    for p in out.mesh.vertices() {
+        assert!(p[0].abs() <= 1.0 + 1e-4 && p[1].abs() <= 1.0 + 1e-4 && p[2].abs() <= 0.0026);
+    }
+}
+
+#[test]
+fn a_thin_noisy_ring_reaches_one_percent() {
+    // A wire ring (tube radius 1 % of the ring's) with noise of a fifth of the tube radius: at
+    // 1 % the corners of a face stand for opposite sides of the tube, their summed normals
+    // point anywhere, and a check against it stopped at 114 faces for 82.
+    let ring = torus(1.0, 0.02, 256, 16);
+    let noisy = ring
+        .vertices()
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let h = |k: f32| ((i as f32 * 12.9898 + k * 78.233).sin() * 43758.547).fract() - 0.5;
+            [
+                p[0] + 0.008 * h(0.0),
+                p[1] + 0.008 * h(1.0),
+                p[2] + 0.008 * h(2.0),
+            ]
+        })
+        .collect();
+    let out = thin_part_reaches_one_percent("ring", &ring.with_vertices(noisy).unwrap());
+    for p in out.mesh.vertices() {
+        let around = (p[0] * p[0] + p[1] * p[1]).sqrt();
+        assert!(((around - 1.0).powi(2) + p[2] * p[2]).sqrt() < 0.1, "{p:?}");
     }
 }
 

@@ -12,10 +12,16 @@ use meshgnn_geometry::vec3::{cross, dot, sub};
 /// Normals of faces may turn by at most `acos(0.2)` ≈ 78° in one collapse.
 pub(crate) const MIN_NORMAL_COS: f64 = 0.2;
 /// A moved face must stay within `acos(0.2)` ≈ 78° of the input surface its corners stand for
-/// (the sum of their region normals), or at least not turn further from it: scans hold
-/// faces already folded against their corners' surface (2 % of snowden.obj's), and a bound
-/// they never met would freeze every collapse around them.
+/// (the sum of their region normals). A face already beyond that bound may stay beyond it if
+/// it does not turn its back on that surface, or turns towards it: scans hold faces folded
+/// against their corners' surface (2 % of snowden.obj's), thin parts hold faces edge-on to it
+/// (a thin plate's rim), and a bound they never met would freeze every collapse around them.
 pub(crate) const MIN_REGION_COS: f64 = 0.2;
+/// The corners' summed region normal is that reference only where they agree, with
+/// `|Σ r| ≥ 0.8 · Σ |r|`: across a thin part (a plate, a wire, the glasses of snowden.obj at
+/// 1 %) the corners stand for opposite sides, and their sum says nothing about which way a
+/// face between them should point (0.9 let a noisy sphere's face turn inwards).
+const MIN_CORNER_AGREEMENT: f64 = 0.8;
 /// A face whose doubled area is below this fraction of its longest squared edge is degenerate.
 const MIN_SLIVER: f64 = 1e-7;
 
@@ -28,6 +34,14 @@ fn others(face: [u32; 3], v: u32) -> [u32; 2] {
     } else {
         [face[0], face[1]]
     }
+}
+
+/// Whether the region normals `corners` of a face's corners point different ways (their sum
+/// `region` is short of [`MIN_CORNER_AGREEMENT`] times their lengths' sum; false for NaN).
+fn corners_disagree(region: [f64; 3], corners: [[f32; 3]; 3]) -> bool {
+    let length = |r: [f64; 3]| dot(r, r).sqrt();
+    let lengths: f64 = corners.iter().map(|r| length(r.map(f64::from))).sum();
+    length(region) < MIN_CORNER_AGREEMENT * lengths
 }
 
 /// Number of values of `x` also in `y` (both free of duplicates, small).
@@ -199,8 +213,7 @@ impl Collapser {
                 {
                     return false;
                 }
-                // Nor may it fold away from the input surface its corners represent, unless
-                // it was folded further before.
+                // Nor may it fold away from the input surface its corners represent.
                 let around = |r: [f32; 3]| -> [f64; 3] {
                     std::array::from_fn(|k| {
                         f64::from(r[k]) + f64::from(vx.region_normal[k] + vy.region_normal[k])
@@ -208,13 +221,19 @@ impl Collapser {
                 };
                 let region = around(merged_region);
                 let norms = (dot(region, region) * len_new2).sqrt();
-                if dot(region, n_new) < MIN_REGION_COS * norms {
+                if dot(region, n_new) < MIN_REGION_COS * norms
+                    && !corners_disagree(
+                        region,
+                        [merged_region, vx.region_normal, vy.region_normal],
+                    )
+                {
                     let cos_new = dot(region, n_new) / norms;
                     let region_old = around(self.verts[moving as usize].region_normal);
                     let cos_old =
                         dot(region_old, n_old) / (dot(region_old, region_old) * len_old2).sqrt();
                     // Also rejects NaN.
-                    if cos_new.partial_cmp(&cos_old) != Some(Ordering::Greater) {
+                    let stays_facing = cos_old < MIN_REGION_COS && cos_new >= 0.0;
+                    if !(cos_new > cos_old || stays_facing) {
                         return false;
                     }
                 }
